@@ -1,0 +1,2 @@
+//! The `cam` binary.
+fn main() {}

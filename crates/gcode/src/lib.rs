@@ -1,0 +1,1 @@
+//! cam-gcode: see `docs/architecture.md`.

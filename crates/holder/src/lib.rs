@@ -1,0 +1,1 @@
+//! cam-holder: see `docs/architecture.md`.

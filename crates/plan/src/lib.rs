@@ -1,0 +1,1 @@
+//! cam-plan: see `docs/architecture.md`.

@@ -1,0 +1,1 @@
+//! cam-sample: see `docs/architecture.md`.

@@ -1,0 +1,1 @@
+//! cam-verify: see `docs/architecture.md`.
