@@ -37,7 +37,10 @@ pub struct Cutter {
 pub const DEFAULT_FLUTE_DIAMETERS: f64 = 3.0;
 
 fn bad(spec: &str, message: impl Into<String>) -> CutterSpecError {
-    CutterSpecError { spec: spec.to_string(), message: message.into() }
+    CutterSpecError {
+        spec: spec.to_string(),
+        message: message.into(),
+    }
 }
 
 impl Cutter {
@@ -103,7 +106,10 @@ impl Cutter {
             CutterKind::Flat => debug_assert!(corner_radius_mm == 0.0),
         }
         if !(c.flute_length_mm.is_finite() && c.flute_length_mm >= corner_radius_mm) {
-            return Err(bad(&spec, "flute length must be a number of mm at least the corner radius"));
+            return Err(bad(
+                &spec,
+                "flute length must be a number of mm at least the corner radius",
+            ));
         }
         Ok(c)
     }
@@ -113,7 +119,12 @@ impl Cutter {
     /// # Errors
     /// As [`Cutter::new`].
     pub fn with_flute_length(self, flute_mm: f64) -> Result<Cutter, CutterSpecError> {
-        Self::new(self.kind, self.diameter_mm, self.corner_radius_mm, Some(flute_mm))
+        Self::new(
+            self.kind,
+            self.diameter_mm,
+            self.corner_radius_mm,
+            Some(flute_mm),
+        )
     }
 
     /// The family.
@@ -182,14 +193,18 @@ impl FromStr for Cutter {
                     .trim()
                     .strip_prefix("flute=")
                     .ok_or_else(|| bad(spec, format!("unknown option '{rest}'; {FORM}")))?;
-                let l: f64 = v.parse().map_err(|_| bad(spec, format!("'{v}' is not a number")))?;
+                let l: f64 = v
+                    .parse()
+                    .map_err(|_| bad(spec, format!("'{v}' is not a number")))?;
                 (m, Some(l))
             }
             None => (spec, None),
         };
         let parts: Vec<&str> = main.trim().split(':').collect();
         let num = |s: &str| -> Result<f64, CutterSpecError> {
-            s.trim().parse::<f64>().map_err(|_| bad(spec, format!("'{s}' is not a number; {FORM}")))
+            s.trim()
+                .parse::<f64>()
+                .map_err(|_| bad(spec, format!("'{s}' is not a number; {FORM}")))
         };
         let kind = parts[0].trim().to_ascii_lowercase();
         let c = match (kind.as_str(), parts.len()) {
@@ -199,8 +214,13 @@ impl FromStr for Cutter {
             }
             ("flat", 2) => Cutter::new(CutterKind::Flat, num(parts[1])?, 0.0, flute),
             ("bull", 3) => Cutter::new(CutterKind::Bull, num(parts[1])?, num(parts[2])?, flute),
-            ("ball" | "flat" | "bull", _) => Err(bad(spec, format!("wrong number of fields; {FORM}"))),
-            _ => Err(bad(spec, format!("unknown cutter type '{}'; {FORM}", parts[0]))),
+            ("ball" | "flat" | "bull", _) => {
+                Err(bad(spec, format!("wrong number of fields; {FORM}")))
+            }
+            _ => Err(bad(
+                spec,
+                format!("unknown cutter type '{}'; {FORM}", parts[0]),
+            )),
         }?;
         Ok(c)
     }
@@ -213,7 +233,10 @@ mod tests {
     #[test]
     fn parse_specs() {
         let b: Cutter = "bull:10:2".parse().unwrap();
-        assert_eq!((b.radius(), b.corner_radius(), b.major_radius()), (5.0, 2.0, 3.0));
+        assert_eq!(
+            (b.radius(), b.corner_radius(), b.major_radius()),
+            (5.0, 2.0, 3.0)
+        );
         assert_eq!(b.to_string(), "bull:10:2");
         let s: Cutter = "ball:6,flute=20".parse().unwrap();
         assert_eq!((s.corner_radius(), s.flute_length()), (3.0, 20.0));
@@ -223,7 +246,17 @@ mod tests {
 
     #[test]
     fn reject_bad_specs() {
-        for s in ["ball", "ball:-1", "ball:nan", "bull:10:5", "bull:10:0", "cone:3", "flat:3:1", "ball:6,foo=1", "ball:inf"] {
+        for s in [
+            "ball",
+            "ball:-1",
+            "ball:nan",
+            "bull:10:5",
+            "bull:10:0",
+            "cone:3",
+            "flat:3:1",
+            "ball:6,foo=1",
+            "ball:inf",
+        ] {
             assert!(s.parse::<Cutter>().is_err(), "{s} accepted");
         }
     }

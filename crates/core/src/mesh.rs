@@ -74,7 +74,10 @@ pub struct Aabb {
 impl Aabb {
     /// The empty box (min = +inf, max = -inf); growing it by a point gives that point.
     pub fn empty() -> Self {
-        Aabb { min: DVec3::splat(f64::INFINITY), max: DVec3::splat(f64::NEG_INFINITY) }
+        Aabb {
+            min: DVec3::splat(f64::INFINITY),
+            max: DVec3::splat(f64::NEG_INFINITY),
+        }
     }
     /// Enlarges the box to contain `p`.
     pub fn grow(&mut self, p: DVec3) {
@@ -126,7 +129,9 @@ impl Mesh {
         let path = path.as_ref();
         let read = triangles.len();
         if read == 0 {
-            return Err(MeshError::NoTriangles { path: path.to_path_buf() });
+            return Err(MeshError::NoTriangles {
+                path: path.to_path_buf(),
+            });
         }
         for (i, t) in triangles.iter().enumerate() {
             for p in t.v {
@@ -142,9 +147,15 @@ impl Mesh {
                 }
             }
         }
-        let kept: Vec<Triangle> = triangles.into_iter().filter(|t| !t.is_degenerate()).collect();
+        let kept: Vec<Triangle> = triangles
+            .into_iter()
+            .filter(|t| !t.is_degenerate())
+            .collect();
         if kept.is_empty() {
-            return Err(MeshError::AllDegenerate { path: path.to_path_buf(), count: read });
+            return Err(MeshError::AllDegenerate {
+                path: path.to_path_buf(),
+                count: read,
+            });
         }
         let mut bounds = Aabb::empty();
         for t in &kept {
@@ -152,8 +163,16 @@ impl Mesh {
                 bounds.grow(p);
             }
         }
-        let stats = LoadStats { triangles_read: read, degenerate_dropped: read - kept.len() };
-        Ok(Mesh { triangles: kept, bounds, stats, source: Some(path.to_path_buf()) })
+        let stats = LoadStats {
+            triangles_read: read,
+            degenerate_dropped: read - kept.len(),
+        };
+        Ok(Mesh {
+            triangles: kept,
+            bounds,
+            stats,
+            source: Some(path.to_path_buf()),
+        })
     }
 
     /// Loads an `.obj` or `.stl` part (binary or ASCII STL), scaling `units` to mm.
@@ -171,7 +190,12 @@ impl Mesh {
         let mut tris = match ext.as_str() {
             "obj" => crate::io::obj::read_obj(path)?,
             "stl" => crate::io::stl::read_stl(path)?,
-            _ => return Err(MeshError::UnknownFormat { path: path.to_path_buf(), ext }),
+            _ => {
+                return Err(MeshError::UnknownFormat {
+                    path: path.to_path_buf(),
+                    ext,
+                });
+            }
         };
         let k = units.mm_per_unit();
         if k != 1.0 {

@@ -18,7 +18,10 @@ pub struct Pose {
 impl Pose {
     /// A 3-axis pose: tool tip at `tip` (mm), axis +Z.
     pub fn vertical(tip: DVec3) -> Pose {
-        Pose { tip, axis: DVec3::Z }
+        Pose {
+            tip,
+            axis: DVec3::Z,
+        }
     }
 }
 

@@ -22,7 +22,13 @@ impl Grid {
     /// 1e-9 mm allowance so an exact multiple is kept).
     pub fn covering(xmin: f64, xmax: f64, ymin: f64, ymax: f64, step: f64) -> Grid {
         let n = |lo: f64, hi: f64| ((hi - lo) / step + 1e-9).floor().max(0.0) as usize + 1;
-        Grid { x0: xmin, y0: ymin, step, nx: n(xmin, xmax), ny: n(ymin, ymax) }
+        Grid {
+            x0: xmin,
+            y0: ymin,
+            step,
+            nx: n(xmin, xmax),
+            ny: n(ymin, ymax),
+        }
     }
     /// Number of points.
     pub fn len(&self) -> usize {
@@ -35,7 +41,10 @@ impl Grid {
     /// XY of point `k` in row-major order (mm).
     pub fn xy(&self, k: usize) -> (f64, f64) {
         let (j, i) = (k / self.nx, k % self.nx);
-        (self.x0 + i as f64 * self.step, self.y0 + j as f64 * self.step)
+        (
+            self.x0 + i as f64 * self.step,
+            self.y0 + j as f64 * self.step,
+        )
     }
 }
 

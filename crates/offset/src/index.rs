@@ -1,48 +1,367 @@
-//! The drop-cutter: a 2-D bucket index over the part's triangles for one cutter radius, and
+//! The drop-cutter: an XY bucket index over the part's triangles for one cutter radius, and
 //! the batch drivers.
 
-use cam_core::{Cutter, Mesh};
+use cam_core::{Cutter, DVec3, Mesh};
+use rayon::prelude::*;
 
-use crate::{ClPoint, Contact, Grid};
+use crate::contact::{self, Hit, Profile};
+use crate::{ClPoint, Contact, ContactKind, Grid};
+
+/// Precomputed per-triangle data, stored in descending order of top z.
+#[derive(Debug, Clone)]
+struct Tri {
+    v: [DVec3; 3],
+    /// Unit normal turned upwards (n.z ≥ 0).
+    n: DVec3,
+    /// Highest z of the triangle: no contact with it can put the tip higher.
+    top: f64,
+    /// XY bounds.
+    lo: [f64; 2],
+    hi: [f64; 2],
+    /// Index in the mesh.
+    orig: u32,
+    /// Bit k (k < 3): this triangle tests edge k (v[k] → v[k+1]); bit 3 + k: it tests
+    /// vertex k. A shared edge or vertex is tested by the first triangle (in descending top
+    /// order) that has it, which is never pruned after one that also has it.
+    owns: u8,
+}
+
+/// Hash of exact vertex coordinates (FxHash-style; keys are bit patterns).
+#[derive(Default)]
+struct BitsHasher(u64);
+impl std::hash::Hasher for BitsHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for b in bytes {
+            self.write_u64(*b as u64);
+        }
+    }
+    fn write_u64(&mut self, v: u64) {
+        self.0 = (self.0.rotate_left(5) ^ v).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+type BitsMap<K> = std::collections::HashMap<K, u32, std::hash::BuildHasherDefault<BitsHasher>>;
+
+fn vkey(p: DVec3) -> [u64; 3] {
+    // +0.0 and -0.0 are the same point.
+    [
+        (p.x + 0.0).to_bits(),
+        (p.y + 0.0).to_bits(),
+        (p.z + 0.0).to_bits(),
+    ]
+}
+
+/// Marks, for each triangle (already in final order), the edges and vertices it tests.
+fn assign_ownership(tris: &mut [Tri]) {
+    let mut vid: BitsMap<[u64; 3]> = BitsMap::default();
+    vid.reserve(tris.len());
+    let ids: Vec<[u32; 3]> = tris
+        .iter()
+        .map(|t| {
+            t.v.map(|p| {
+                let n = vid.len() as u32;
+                *vid.entry(vkey(p)).or_insert(n)
+            })
+        })
+        .collect();
+    drop(vid);
+    let nverts = ids
+        .iter()
+        .flatten()
+        .map(|&i| i as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut vseen = vec![false; nverts];
+    let mut eseen: BitsMap<u64> = BitsMap::default();
+    eseen.reserve(tris.len() * 3 / 2);
+    for (t, id) in tris.iter_mut().zip(&ids) {
+        let mut owns = 0u8;
+        for k in 0..3 {
+            let (a, b) = (id[k], id[(k + 1) % 3]);
+            let key = ((a.min(b) as u64) << 32) | a.max(b) as u64;
+            if eseen.insert(key, 0).is_none() {
+                owns |= 1 << k;
+            }
+            if !std::mem::replace(&mut vseen[id[k] as usize], true) {
+                owns |= 1 << (3 + k);
+            }
+        }
+        t.owns = owns;
+    }
+}
 
 /// A part prepared for dropping one cutter: triangles with precomputed data in an XY bucket
-/// grid whose cells list every triangle within the cutter radius, sorted by descending top z
-/// so a query stops as soon as no remaining triangle can raise the cutter.
+/// grid whose cells list every triangle that can come within the cutter radius of a point in
+/// the cell, sorted by descending top z, so a query reads one cell and stops as soon as no
+/// remaining triangle can raise the cutter.
+///
+/// # Guarantees
+/// Each query is exact (see the crate docs) and independent of every other, so batch results
+/// are bit-for-bit identical for any number of threads.
 ///
 /// # Performance
-/// Building is O(triangles × cells each covers); a query touches one cell.
+/// Building is O(n log n + n·k) for n triangles each listed in k cells (k ≈ 10–30); a query
+/// scans one cell's list from the top and usually stops after a few triangles.
 #[derive(Debug, Clone)]
 pub struct DropCutter {
     cutter: Cutter,
+    pf: Profile,
+    tris: Vec<Tri>,
+    /// Cell grid origin, cell size and counts.
+    ox: f64,
+    oy: f64,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    /// CSR: items[start[c]..start[c+1]] are the triangle slots of cell c (ascending slot =
+    /// descending top z).
+    start: Vec<u32>,
+    items: Vec<u32>,
 }
 
+/// Points dropped in sequence (sharing pruning floors) per parallel task.
+const RUN: usize = 128;
+/// Rounding margin (mm) below a neighbour's contact when it is used as a pruning floor.
+const FLOOR_MARGIN: f64 = 1e-9;
+
+/// Upper bound on the number of index cells (memory guard for tiny tools on huge parts).
+const MAX_CELLS: f64 = 4.0e6;
+
 impl DropCutter {
-    /// Prepares `mesh` for dropping `cutter`.
+    /// Prepares `mesh` for dropping `cutter` (axis +Z).
     pub fn new(mesh: &Mesh, cutter: Cutter) -> DropCutter {
-        let _ = mesh;
-        DropCutter { cutter }
+        let pf = Profile::new(&cutter);
+        let big_r = pf.big_r;
+        let mut tris: Vec<Tri> = mesh
+            .triangles()
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                let n = t.normal().unwrap_or(DVec3::Z);
+                let n = if n.z < 0.0 { -n } else { n };
+                let [a, b, c] = t.v;
+                Tri {
+                    v: t.v,
+                    n,
+                    top: a.z.max(b.z).max(c.z),
+                    lo: [a.x.min(b.x).min(c.x), a.y.min(b.y).min(c.y)],
+                    hi: [a.x.max(b.x).max(c.x), a.y.max(b.y).max(c.y)],
+                    orig: i as u32,
+                    owns: 0,
+                }
+            })
+            .collect();
+        // Descending top z; ties by mesh order so the layout is deterministic.
+        tris.sort_by(|p, q| q.top.total_cmp(&p.top).then(p.orig.cmp(&q.orig)));
+        assign_ownership(&mut tris);
+
+        let b = mesh.bounds();
+        let (ox, oy) = (b.min.x - big_r, b.min.y - big_r);
+        let (w, h) = (b.size().x + 2.0 * big_r, b.size().y + 2.0 * big_r);
+        // Cells of half the cutter radius, grown if the grid would be too large.
+        let mut cell = 0.5 * big_r;
+        if (w / cell) * (h / cell) > MAX_CELLS {
+            cell = (w * h / MAX_CELLS).sqrt();
+        }
+        let nx = ((w / cell).floor() as usize + 1).max(1);
+        let ny = ((h / cell).floor() as usize + 1).max(1);
+        let span = |t: &Tri| {
+            let c =
+                |v: f64, o: f64, n: usize| (((v - o) / cell).floor().max(0.0) as usize).min(n - 1);
+            (
+                c(t.lo[0] - big_r, ox, nx),
+                c(t.hi[0] + big_r, ox, nx),
+                c(t.lo[1] - big_r, oy, ny),
+                c(t.hi[1] + big_r, oy, ny),
+            )
+        };
+        let mut count = vec![0u32; nx * ny + 1];
+        for t in &tris {
+            let (x0, x1, y0, y1) = span(t);
+            for j in y0..=y1 {
+                for i in x0..=x1 {
+                    count[j * nx + i + 1] += 1;
+                }
+            }
+        }
+        for k in 1..count.len() {
+            count[k] += count[k - 1];
+        }
+        let start = count;
+        let mut fill = start.clone();
+        let mut items = vec![0u32; start[nx * ny] as usize];
+        for (slot, t) in tris.iter().enumerate() {
+            let (x0, x1, y0, y1) = span(t);
+            for j in y0..=y1 {
+                for i in x0..=x1 {
+                    let c = j * nx + i;
+                    items[fill[c] as usize] = slot as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        DropCutter {
+            cutter,
+            pf,
+            tris,
+            ox,
+            oy,
+            cell,
+            nx,
+            ny,
+            start,
+            items,
+        }
     }
+
     /// The cutter.
     pub fn cutter(&self) -> Cutter {
         self.cutter
     }
-    /// Tool-tip z (mm) at `(x, y)`, or `None` if the cutter touches no triangle.
+
+    /// Tool-tip z (mm) at `(x, y)`: the lowest tip height at which the cutter touches the
+    /// part without penetrating any triangle, or `None` if no triangle comes within the
+    /// cutter radius.
     pub fn drop(&self, x: f64, y: f64) -> Option<f64> {
         self.contact(x, y).map(|c| c.z_tip)
     }
+
     /// Like [`DropCutter::drop`] but also says where and how the cutter touches.
     pub fn contact(&self, x: f64, y: f64) -> Option<Contact> {
-        let _ = (x, y);
-        todo!()
+        self.contact_above(x, y, f64::NEG_INFINITY)
     }
-    /// Drops at every `(x, y)` in order, in parallel; identical for any thread count.
+
+    /// The exact contact, skipping features that cannot reach `floor`. `floor` must not
+    /// exceed the true tip height (callers pass a proven lower bound minus a rounding
+    /// margin); the result is then bit-for-bit the same as [`DropCutter::contact`].
+    fn contact_above(&self, x: f64, y: f64, floor: f64) -> Option<Contact> {
+        if !(x.is_finite() && y.is_finite()) {
+            return None;
+        }
+        let fi = ((x - self.ox) / self.cell).floor();
+        let fj = ((y - self.oy) / self.cell).floor();
+        if fi < 0.0 || fj < 0.0 || fi >= self.nx as f64 || fj >= self.ny as f64 {
+            return None;
+        }
+        let c = fj as usize * self.nx + fi as usize;
+        let slots = &self.items[self.start[c] as usize..self.start[c + 1] as usize];
+        let pf = &self.pf;
+        let mut best = f64::NEG_INFINITY;
+        let mut found: Option<(Hit, ContactKind, u32)> = None;
+        let mut take = |hit: Option<Hit>, kind: ContactKind, t: &Tri, best: &mut f64| {
+            if let Some(h) = hit.filter(|h| h.0 > *best) {
+                *best = h.0;
+                found = Some((h, kind, t.orig));
+            }
+        };
+        for &s in slots {
+            let t = &self.tris[s as usize];
+            // Sorted by descending top: nothing below can raise the cutter.
+            if t.top <= best || t.top < floor {
+                break;
+            }
+            let dx = (t.lo[0] - x).max(x - t.hi[0]).max(0.0);
+            let dy = (t.lo[1] - y).max(y - t.hi[1]).max(0.0);
+            if dx * dx + dy * dy > pf.big_r2 {
+                continue;
+            }
+            let prune = best.max(floor);
+            for (k, &p) in t.v.iter().enumerate() {
+                if t.owns & (8 << k) != 0 && p.z > best && p.z >= floor {
+                    take(
+                        contact::vertex(pf, x, y, p),
+                        ContactKind::Vertex,
+                        t,
+                        &mut best,
+                    );
+                }
+            }
+            if t.n.z > 1e-12 {
+                take(
+                    contact::facet(pf, x, y, &t.v, t.n),
+                    ContactKind::Facet,
+                    t,
+                    &mut best,
+                );
+            }
+            for k in 0..3 {
+                if t.owns & (1 << k) != 0 {
+                    let (p1, p2) = (t.v[k], t.v[(k + 1) % 3]);
+                    let hit = contact::edge(pf, x, y, p1, p2, prune.max(best));
+                    take(hit, ContactKind::Edge, t, &mut best);
+                }
+            }
+        }
+        found.map(|((z_tip, cc), kind, triangle)| Contact {
+            z_tip,
+            cc,
+            kind,
+            triangle,
+        })
+    }
+
+    /// Drops along a sequence, using each contact point as a pruning floor for the next.
+    fn drop_run(&self, xy: impl Iterator<Item = (f64, f64)>, out: &mut [ClPoint]) {
+        let mut prev: Option<DVec3> = None;
+        for ((x, y), slot) in xy.zip(out.iter_mut()) {
+            let floor = prev
+                .and_then(|cc| contact::vertex(&self.pf, x, y, cc))
+                .map_or(f64::NEG_INFINITY, |(z, _)| z - FLOOR_MARGIN);
+            let c = self.contact_above(x, y, floor);
+            prev = c.map(|c| c.cc).or(prev);
+            *slot = ClPoint {
+                x,
+                y,
+                z_tip: c.map(|c| c.z_tip),
+            };
+        }
+    }
+
+    /// Drops at every `(x, y)` in order, in parallel; identical for any thread count (and
+    /// to dropping each point alone with [`DropCutter::drop`]).
     pub fn drop_points(&self, xy: &[(f64, f64)]) -> Vec<ClPoint> {
-        let _ = xy;
-        todo!()
+        let mut out = vec![
+            ClPoint {
+                x: 0.0,
+                y: 0.0,
+                z_tip: None
+            };
+            xy.len()
+        ];
+        out.par_chunks_mut(RUN)
+            .zip(xy.par_chunks(RUN))
+            .for_each(|(o, p)| {
+                self.drop_run(p.iter().copied(), o);
+            });
+        out
     }
-    /// Drops over a grid, in parallel, row-major order.
+
+    /// Drops over a grid, in parallel by rows, in row-major order; identical for any thread
+    /// count.
     pub fn drop_grid(&self, grid: &Grid) -> Vec<ClPoint> {
-        let _ = grid;
-        todo!()
+        let mut out = vec![
+            ClPoint {
+                x: 0.0,
+                y: 0.0,
+                z_tip: None
+            };
+            grid.len()
+        ];
+        if grid.nx == 0 {
+            return out;
+        }
+        out.par_chunks_mut(grid.nx)
+            .enumerate()
+            .for_each(|(j, row)| {
+                self.drop_run((0..grid.nx).map(|i| grid.xy(j * grid.nx + i)), row);
+            });
+        out
+    }
+
+    /// Approximate heap bytes held by the index (triangle data and cell lists).
+    pub fn heap_bytes(&self) -> usize {
+        self.tris.len() * std::mem::size_of::<Tri>() + (self.start.len() + self.items.len()) * 4
     }
 }

@@ -16,8 +16,10 @@ use crate::mesh::Triangle;
 /// [`MeshError::Io`], [`MeshError::Parse`] with the line when it can be located,
 /// [`MeshError::NonFinite`] with the line of the vertex.
 pub fn read_obj(path: &Path) -> Result<Vec<Triangle>, MeshError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| MeshError::Io { path: path.to_path_buf(), source: e })?;
+    let bytes = std::fs::read(path).map_err(|e| MeshError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
     parse_obj(&bytes, path)
 }
 
@@ -73,7 +75,10 @@ fn nth_statement_line(text: &str, kw: &str, n: usize) -> Option<usize> {
 fn locate(bytes: &[u8], path: &Path, e: tobj::LoadError) -> MeshError {
     use tobj::LoadError as L;
     let text = String::from_utf8_lossy(bytes);
-    let nverts = text.lines().filter(|l| l.split_whitespace().next() == Some("v")).count();
+    let nverts = text
+        .lines()
+        .filter(|l| l.split_whitespace().next() == Some("v"))
+        .count();
     let bad_floats = |kw: &str, n: usize| {
         text.lines().enumerate().find_map(|(i, l)| {
             let mut it = l.split_whitespace();
@@ -100,7 +105,12 @@ fn locate(bytes: &[u8], path: &Path, e: tobj::LoadError) -> MeshError {
         Some((l, m)) => (Some(l), m),
         None => (None, format!("malformed OBJ: {e}")),
     };
-    MeshError::Parse { path: path.to_path_buf(), line, triangle: None, message }
+    MeshError::Parse {
+        path: path.to_path_buf(),
+        line,
+        triangle: None,
+        message,
+    }
 }
 
 /// Finds the first face statement with fewer than 3 corners or a bad vertex index.
@@ -113,7 +123,10 @@ fn bad_face(text: &str, nverts: usize) -> Option<(usize, String)> {
             Some("f") => {
                 let corners: Vec<&str> = it.collect();
                 if corners.len() < 3 {
-                    return Some((i + 1, format!("face with {} corners: '{}'", corners.len(), l.trim())));
+                    return Some((
+                        i + 1,
+                        format!("face with {} corners: '{}'", corners.len(), l.trim()),
+                    ));
                 }
                 for c in corners {
                     let idx = c.split('/').next().unwrap_or("");
@@ -124,7 +137,9 @@ fn bad_face(text: &str, nverts: usize) -> Option<(usize, String)> {
                         Ok(k) if k > nverts as i64 || (k < 0 && -k > seen_v as i64) => {
                             return Some((
                                 i + 1,
-                                format!("vertex index {k} out of range (file has {nverts} vertices)"),
+                                format!(
+                                    "vertex index {k} out of range (file has {nverts} vertices)"
+                                ),
                             ));
                         }
                         Ok(_) => {}
@@ -162,7 +177,10 @@ mod tests {
     #[test]
     fn nan_vertex_names_line() {
         let e = parse("v 0 0 0\nv 1 0 0\n\nv 0 nan 0\nf 1 2 3\n").unwrap_err();
-        assert!(matches!(e, MeshError::NonFinite { line: Some(4), .. }), "{e}");
+        assert!(
+            matches!(e, MeshError::NonFinite { line: Some(4), .. }),
+            "{e}"
+        );
     }
 
     #[test]

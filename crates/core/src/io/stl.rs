@@ -15,8 +15,10 @@ use crate::mesh::Triangle;
 /// [`MeshError::Io`], [`MeshError::Parse`] (line for ASCII, triangle record for binary),
 /// [`MeshError::NonFinite`].
 pub fn read_stl(path: &Path) -> Result<Vec<Triangle>, MeshError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| MeshError::Io { path: path.to_path_buf(), source: e })?;
+    let bytes = std::fs::read(path).map_err(|e| MeshError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
     parse_stl(&bytes, path)
 }
 
@@ -31,12 +33,19 @@ pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Vec<Triangle>, MeshError> 
             return parse_binary(bytes, n, path);
         }
     }
-    let head = bytes.iter().skip_while(|b| b.is_ascii_whitespace()).take(5).copied();
+    let head = bytes
+        .iter()
+        .skip_while(|b| b.is_ascii_whitespace())
+        .take(5)
+        .copied();
     if head.eq(b"solid".iter().copied()) {
         return parse_ascii(bytes, path);
     }
     let message = if bytes.len() < 84 {
-        format!("file too short for binary STL ({} bytes) and not ASCII STL", bytes.len())
+        format!(
+            "file too short for binary STL ({} bytes) and not ASCII STL",
+            bytes.len()
+        )
     } else {
         let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
         format!(
@@ -45,15 +54,18 @@ pub fn parse_stl(bytes: &[u8], path: &Path) -> Result<Vec<Triangle>, MeshError> 
             bytes.len()
         )
     };
-    Err(MeshError::Parse { path: path.to_path_buf(), line: None, triangle: None, message })
+    Err(MeshError::Parse {
+        path: path.to_path_buf(),
+        line: None,
+        triangle: None,
+        message,
+    })
 }
 
 fn parse_binary(bytes: &[u8], n: usize, path: &Path) -> Result<Vec<Triangle>, MeshError> {
     let mut tris = Vec::with_capacity(n);
     for (i, rec) in bytes[84..].chunks_exact(50).enumerate() {
-        let f = |o: usize| {
-            f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]) as f64
-        };
+        let f = |o: usize| f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]) as f64;
         let mut v = [DVec3::ZERO; 3];
         for (k, p) in v.iter_mut().enumerate() {
             let o = 12 + 12 * k;
@@ -79,8 +91,12 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Vec<Triangle>, MeshError> {
         triangle: None,
         message,
     };
-    let text = std::str::from_utf8(bytes)
-        .map_err(|e| err(line_of_offset(bytes, e.valid_up_to()), "ASCII STL is not valid UTF-8".into()))?;
+    let text = std::str::from_utf8(bytes).map_err(|e| {
+        err(
+            line_of_offset(bytes, e.valid_up_to()),
+            "ASCII STL is not valid UTF-8".into(),
+        )
+    })?;
     let mut tris = Vec::new();
     let mut verts: Vec<DVec3> = Vec::with_capacity(3);
     // Expected next keyword, to reject statements out of order.
@@ -132,7 +148,10 @@ fn parse_ascii(bytes: &[u8], path: &Path) -> Result<Vec<Triangle>, MeshError> {
             }
             ("endloop", St::Vertex) => {
                 if verts.len() != 3 {
-                    return Err(err(ln, format!("facet has {} vertices, expected 3", verts.len())));
+                    return Err(err(
+                        ln,
+                        format!("facet has {} vertices, expected 3", verts.len()),
+                    ));
                 }
                 tris.push(Triangle::new(verts[0], verts[1], verts[2]));
                 verts.clear();
@@ -208,7 +227,10 @@ mod tests {
     fn ascii_nan_names_line() {
         let s = ASCII.replace("vertex 0 1 0", "vertex 0 NaN 0");
         let e = parse_stl(s.as_bytes(), Path::new("a.stl")).unwrap_err();
-        assert!(matches!(e, MeshError::NonFinite { line: Some(6), .. }), "{e}");
+        assert!(
+            matches!(e, MeshError::NonFinite { line: Some(6), .. }),
+            "{e}"
+        );
     }
 
     #[test]
@@ -226,8 +248,21 @@ mod tests {
     fn binary_nan_names_record() {
         let tri = Triangle::new(DVec3::ZERO, DVec3::X, DVec3::new(0.0, f64::NAN, 0.0));
         let mut buf = Vec::new();
-        write_binary_stl(&mut buf, &[Triangle::new(DVec3::ZERO, DVec3::X, DVec3::Y), tri]).unwrap();
+        write_binary_stl(
+            &mut buf,
+            &[Triangle::new(DVec3::ZERO, DVec3::X, DVec3::Y), tri],
+        )
+        .unwrap();
         let e = parse_stl(&buf, Path::new("b.stl")).unwrap_err();
-        assert!(matches!(e, MeshError::NonFinite { triangle: Some(1), .. }), "{e}");
+        assert!(
+            matches!(
+                e,
+                MeshError::NonFinite {
+                    triangle: Some(1),
+                    ..
+                }
+            ),
+            "{e}"
+        );
     }
 }

@@ -1,0 +1,1 @@
+//! Agreement with OpenCAMLib (reference CSVs committed under fixtures/ocl/).
