@@ -1,0 +1,4 @@
+//! End-to-end tests of the `cam` binary (one integration binary).
+
+mod cl;
+mod support;
