@@ -6,6 +6,7 @@
 
 mod cl;
 mod exit;
+mod plan;
 mod progress;
 mod xy_csv;
 
@@ -25,6 +26,8 @@ struct Cli {
 enum Command {
     /// Cutter-location points by exact drop-cutter (inverse tool offset), as CSV.
     Cl(cl::ClArgs),
+    /// Plan finishing passes and write G-code (verified unless --no-verify).
+    Plan(plan::PlanArgs),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +41,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Cl(a) => cl::run(a),
+        Command::Plan(a) => plan::run(a),
     };
     exit::finish(result)
 }
