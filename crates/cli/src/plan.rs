@@ -6,7 +6,10 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use cam_core::{Mesh, MoveKind, Units};
 use cam_gcode::{AptHeader, Post, PostJob};
+use cam_holder::{AssemblyDefaults, CheckConfig, HolderPolicy, ToolAssembly, ToolLibrary};
 use cam_plan::{Direction, Milling, PlanConfig};
+
+use crate::exit::Findings;
 
 /// Arguments of `cam plan`. Every length flag is in mm (feeds in mm/min) whatever the part's
 /// or the program's units.
@@ -21,6 +24,14 @@ pub struct PlanArgs {
     /// Default: ball:6, or with a library the largest tool that fits the part.
     #[arg(long)]
     pub tool: Option<String>,
+    /// Tool library (JSON, see docs/tool-library.md); --tool then names a tool id.
+    #[arg(long)]
+    pub tool_library: Option<PathBuf>,
+    /// What to do when the shank or holder collides with the part: fail (exit 1, no G-code),
+    /// report (write G-code and print the collisions) or avoid (lift over colliding
+    /// stretches and say what was left unmachined).
+    #[arg(long, default_value = "fail")]
+    pub holder: HolderPolicy,
     /// Feed-forward tolerance τ (mm): largest distance of a cut move from the exact CL surface.
     #[arg(long, default_value_t = 0.01)]
     pub tolerance: f64,
@@ -33,15 +44,15 @@ pub struct PlanArgs {
     /// Post-processor.
     #[arg(long, default_value = "linuxcnc")]
     pub post: Post,
-    /// Cutting feed (mm/min).
-    #[arg(long, default_value_t = 1000.0)]
-    pub feed: f64,
-    /// Plunge feed (mm/min).
-    #[arg(long, default_value_t = 300.0)]
-    pub plunge_feed: f64,
-    /// Spindle speed (rev/min), clockwise (M3).
-    #[arg(long, default_value_t = 10000.0)]
-    pub rpm: f64,
+    /// Cutting feed (mm/min); default the library tool's, else 1000.
+    #[arg(long)]
+    pub feed: Option<f64>,
+    /// Plunge feed (mm/min); default the library tool's, else 300.
+    #[arg(long)]
+    pub plunge_feed: Option<f64>,
+    /// Spindle speed (rev/min), clockwise (M3); default the library tool's, else 10000.
+    #[arg(long)]
+    pub rpm: Option<f64>,
     /// Safe Z of the tool tip for rapids (mm); default 5 mm above the highest CL point.
     #[arg(long)]
     pub safe_z: Option<f64>,
@@ -107,26 +118,71 @@ fn parse_box(s: &str) -> Result<(f64, f64, f64, f64), String> {
     }
 }
 
+/// The tool: from the library (named or chosen by curvature and holder clearance), or a
+/// spec with the default shank and holder.
+fn choose_tool(
+    a: &PlanArgs,
+    mesh: &Mesh,
+    base: &PlanConfig,
+) -> Result<(ToolAssembly, Option<String>)> {
+    let Some(lib_path) = &a.tool_library else {
+        let cutter: cam_core::Cutter = match &a.tool {
+            Some(spec) => spec.parse()?,
+            None => cam_core::Cutter::ball(6.0)?,
+        };
+        return Ok((
+            ToolAssembly::from_spec(cutter, &AssemblyDefaults::default()),
+            None,
+        ));
+    };
+    let lib = ToolLibrary::load(lib_path)?;
+    if let Some(id) = &a.tool {
+        let t = lib.get(id).with_context(|| {
+            let ids: Vec<&str> = lib.tools.iter().map(|t| t.id.as_str()).collect();
+            format!(
+                "{}: no tool '{id}' (tools: {})",
+                lib_path.display(),
+                ids.join(", ")
+            )
+        })?;
+        return Ok((t.clone(), None));
+    }
+    let curv = cam_holder::concave_curvature(mesh, &cam_holder::CurvatureConfig::default());
+    let plan_for = |t: &ToolAssembly| -> Option<cam_core::Toolpath> {
+        let cfg = PlanConfig {
+            cutter: t.cutter,
+            ..*base
+        };
+        cam_plan::plan_part(mesh, &cfg, None)
+            .ok()
+            .map(|p| p.toolpath)
+    };
+    let sel = cam_holder::select_tool(
+        &lib,
+        mesh,
+        &curv,
+        Some(&plan_for),
+        &cam_holder::SelectConfig::default(),
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", a.part.display()))?;
+    let why = format!(
+        "tool {} chosen from {} (smallest concave radius {}; {} larger tools passed over)",
+        sel.tool_id,
+        lib_path.display(),
+        curv.min.map_or("none".to_string(), |m| format!(
+            "{:.3} mm at ({:.2}, {:.2}, {:.2})",
+            m.radius_mm, m.region.x, m.region.y, m.region.z
+        )),
+        sel.rejected.len()
+    );
+    Ok((sel.assembly, Some(why)))
+}
+
 /// Runs `cam plan`.
 pub fn run(a: PlanArgs) -> Result<()> {
-    for (name, v) in [
-        ("--feed", a.feed),
-        ("--plunge-feed", a.plunge_feed),
-        ("--rpm", a.rpm),
-        ("--rapid-rate", a.rapid_rate),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            bail!("{name} must be a positive number, got {v}");
-        }
-    }
     let t0 = Instant::now();
     let mesh = Mesh::load(&a.part, a.units)?;
-    let cutter = match &a.tool {
-        Some(spec) => spec.parse()?,
-        None => cam_core::Cutter::ball(6.0)?,
-    };
-    let cfg = PlanConfig {
-        cutter,
+    let mut cfg = PlanConfig {
         tolerance_mm: a.tolerance,
         scallop_mm: a.scallop,
         angle_deg: a.angle,
@@ -143,6 +199,30 @@ pub fn run(a: PlanArgs) -> Result<()> {
         ..PlanConfig::default()
     };
     cfg.validate()?;
+    let (assembly, chosen) = choose_tool(&a, &mesh, &cfg)?;
+    let cutter = assembly.cutter;
+    cfg.cutter = cutter;
+    cfg.validate()?;
+    if let (Some(why), false) = (&chosen, a.json) {
+        eprintln!("cam plan: {why}");
+    }
+    let feeds = &assembly.feeds;
+    let feed = a.feed.or(feeds.feed_mm_per_min).unwrap_or(1000.0);
+    let plunge_feed = a
+        .plunge_feed
+        .or(feeds.plunge_feed_mm_per_min)
+        .unwrap_or(300.0);
+    let rpm = a.rpm.or(feeds.rpm).unwrap_or(10000.0);
+    for (name, v) in [
+        ("--feed", feed),
+        ("--plunge-feed", plunge_feed),
+        ("--rpm", rpm),
+        ("--rapid-rate", a.rapid_rate),
+    ] {
+        if !(v.is_finite() && v > 0.0) {
+            bail!("{name} must be a positive number, got {v}");
+        }
+    }
     let pb = crate::progress::bar(0, "planning", a.json);
     let progress = |done: usize, total: usize| {
         pb.set_length(total as u64);
@@ -162,18 +242,80 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let job = PostJob {
         part_name: part_name.clone(),
         tool_spec: cutter.to_string(),
-        tool_number: a.tool_number,
+        tool_number: assembly.number.unwrap_or(a.tool_number),
         tolerance_mm: a.tolerance,
         scallop_mm: a.scallop,
-        feed_mm_per_min: a.feed,
-        plunge_feed_mm_per_min: a.plunge_feed,
-        rpm: a.rpm,
+        feed_mm_per_min: feed,
+        plunge_feed_mm_per_min: plunge_feed,
+        rpm,
         spindle_cw: true,
         safe_z_mm: plan.safe_z_mm,
         units: a.gcode_units,
         ..PostJob::default()
     };
-    let program = cam_gcode::post_to_string(&plan.toolpath, &job, a.post)?;
+    let mut toolpath = plan.toolpath.clone();
+    let mut program = cam_gcode::post_to_string(&toolpath, &job, a.post)?;
+    // Check what the machine will run: the program read back, with its line numbers.
+    let t1 = Instant::now();
+    let mut readback = reread(&program, &a)?;
+    let check = CheckConfig::default();
+    let mut report = cam_holder::check_toolpath(&mesh, &assembly, &readback, &check);
+    let stick = cam_holder::min_stick_out(&mesh, &assembly, &readback, &check);
+    let mut avoided = None;
+    if !report.is_clear() {
+        match a.holder {
+            HolderPolicy::Fail => {
+                print_collisions(&report, &assembly);
+                return Err(Findings(format!(
+                    "{} holder/shank collisions (deepest {:.3} mm) with {} at stick-out {} mm; \
+                     minimum collision-free stick-out {}; no G-code written (--holder report or avoid to override)",
+                    report.collisions.len(),
+                    report.max_depth_mm,
+                    assembly.id,
+                    assembly.stick_out_mm,
+                    fmt_stick(&stick)
+                ))
+                .into());
+            }
+            HolderPolicy::Report => print_collisions(&report, &assembly),
+            HolderPolicy::Avoid => {
+                let side = plan
+                    .pass_v_mm
+                    .windows(2)
+                    .map(|w| (w[1] - w[0]).abs())
+                    .fold(0.0, f64::max);
+                let (lifted, summary) = cam_holder::avoid(
+                    &readback,
+                    &report.collisions,
+                    &cam_holder::AvoidConfig {
+                        safe_z_mm: plan.safe_z_mm,
+                        stepover_mm: side,
+                    },
+                );
+                toolpath = lifted;
+                program = cam_gcode::post_to_string(&toolpath, &job, a.post)?;
+                readback = reread(&program, &a)?;
+                report = cam_holder::check_toolpath(&mesh, &assembly, &readback, &check);
+                if !report.is_clear() {
+                    print_collisions(&report, &assembly);
+                    return Err(Findings(
+                        "collisions remain after lifting; no G-code written".into(),
+                    )
+                    .into());
+                }
+                if !a.json {
+                    eprintln!(
+                        "cam plan: lifted over {} colliding stretches: {:.1} mm of cut dropped, about {:.1} mm² left unmachined",
+                        summary.stretches.len(),
+                        summary.removed_cut_length_mm,
+                        summary.unmachined_area_mm2
+                    );
+                }
+                avoided = Some(summary);
+            }
+        }
+    }
+    let t_holder = t1.elapsed().as_secs_f64();
     cam_core::io::write_atomic(&a.output, |w| w.write_all(program.as_bytes()))
         .with_context(|| format!("{}: cannot write", a.output.display()))?;
     if let Some(cl) = &a.cl_out {
@@ -181,45 +323,95 @@ pub fn run(a: PlanArgs) -> Result<()> {
             part_name: part_name.clone(),
             cutter: Some(cutter),
         };
-        cam_core::io::write_atomic(cl, |w| cam_gcode::write_apt(w, &plan.toolpath, &header))
+        cam_core::io::write_atomic(cl, |w| cam_gcode::write_apt(w, &toolpath, &header))
             .with_context(|| format!("{}: cannot write", cl.display()))?;
     }
-
-    let tp = &plan.toolpath;
+    let holder_json = serde_json::json!({
+        "tool": assembly.id, "stick_out_mm": assembly.stick_out_mm,
+        "collisions": report.collisions.len(), "max_depth_mm": report.max_depth_mm,
+        "min_stick_out_mm": stick.min_mm, "policy": format!("{:?}", a.holder).to_lowercase(),
+        "removed_cut_length_mm": avoided.as_ref().map(|s| s.removed_cut_length_mm),
+        "unmachined_area_mm2": avoided.as_ref().map(|s| s.unmachined_area_mm2),
+        "check_s": t_holder,
+    });
+    let tp = &toolpath;
     let plunge_len = tp.length_where(|k| matches!(k, MoveKind::Plunge | MoveKind::Retract));
-    let cycle_min = plan.cut_length_mm / a.feed
-        + plunge_len / a.plunge_feed
-        + plan.rapid_length_mm / a.rapid_rate;
+    let cut_len = tp.length_where(|k| k == MoveKind::Cut);
+    let rapid_len = tp.length_where(|k| k == MoveKind::Rapid);
+    let cycle_min = cut_len / feed + plunge_len / plunge_feed + rapid_len / a.rapid_rate;
     let summary = serde_json::json!({
         "part": a.part, "output": a.output, "tool": cutter.to_string(), "post": a.post.name(),
         "tolerance_mm": a.tolerance, "scallop_mm": a.scallop,
         "passes": plan.passes, "cl_points": plan.cl_points, "moves": tp.moves.len(),
-        "cut_length_mm": plan.cut_length_mm, "rapid_length_mm": plan.rapid_length_mm,
-        "plunge_retract_length_mm": plan.plunge_retract_length_mm,
+        "cut_length_mm": cut_len, "rapid_length_mm": rapid_len,
+        "plunge_retract_length_mm": plunge_len,
         "estimated_cycle_time_min": cycle_min,
         "max_chord_deviation_mm": plan.max_chord_deviation_mm,
         "predicted_max_scallop_mm": plan.predicted_max_scallop_mm,
         "unresolved_joins": plan.unresolved_joins,
         "safe_z_mm": plan.safe_z_mm,
-        "plan_s": t_plan,
+        "plan_s": t_plan, "holder": holder_json,
     });
     if a.json {
         println!("{summary}");
     } else {
         eprintln!(
             "cam plan: {} passes, {} CL points, cut {:.0} mm, rapid {:.0} mm, ~{:.1} min; \
-             chordal deviation ≤ {:.4} mm (τ {}), scallop ≤ {:.4} mm (h {}) -> {}",
+             chordal deviation ≤ {:.4} mm (τ {}), scallop ≤ {:.4} mm (h {}); holder: {} collisions, \
+             minimum stick-out {} -> {}",
             plan.passes,
             plan.cl_points,
-            plan.cut_length_mm,
-            plan.rapid_length_mm,
+            cut_len,
+            rapid_len,
             cycle_min,
             plan.max_chord_deviation_mm,
             a.tolerance,
             plan.predicted_max_scallop_mm,
             a.scallop,
+            report.collisions.len(),
+            fmt_stick(&stick),
             a.output.display()
         );
     }
     Ok(())
+}
+
+/// Reads a posted program back (the moves the machine will run, with their lines).
+fn reread(program: &str, a: &PlanArgs) -> Result<cam_core::Toolpath> {
+    cam_gcode::parse_gcode(program, &cam_gcode::ReadConfig::default()).map_err(|e| {
+        anyhow::anyhow!(
+            "internal: the {} post wrote a program our reader rejects: {e}",
+            a.post.name()
+        )
+    })
+}
+
+fn fmt_stick(s: &cam_holder::StickOut) -> String {
+    match s.min_mm {
+        Some(m) => format!("{m:.3} mm"),
+        None => "none (the shank itself collides)".into(),
+    }
+}
+
+/// Prints the collision report (first 20 findings) on stderr.
+fn print_collisions(r: &cam_holder::CollisionReport, asm: &ToolAssembly) {
+    eprintln!(
+        "holder/shank collisions with {} (stick-out {} mm):",
+        asm.id, asm.stick_out_mm
+    );
+    for c in r.collisions.iter().take(20) {
+        eprintln!(
+            "  line {:>6}  pass {:>4}  at ({:.3}, {:.3}, {:.3})  {}  depth {:.3} mm",
+            c.line.map_or("-".into(), |l| l.to_string()),
+            c.pass.map_or("-".into(), |p| p.to_string()),
+            c.position.x,
+            c.position.y,
+            c.position.z,
+            c.part,
+            c.depth_mm
+        );
+    }
+    if r.collisions.len() > 20 {
+        eprintln!("  ... and {} more", r.collisions.len() - 20);
+    }
 }

@@ -67,6 +67,7 @@ impl Toolpath {
             .windows(2)
             .filter(|w| keep(w[1].kind))
             .map(|w| w[1].pose.tip.distance(w[0].pose.tip))
-            .sum()
+            .sum::<f64>()
+            + 0.0 // an empty sum of f64 is -0.0
     }
 }

@@ -1,4 +1,6 @@
 //! End-to-end tests of the `cam` binary (one integration binary).
 
 mod cl;
+mod plan;
+mod plan_checks;
 mod support;

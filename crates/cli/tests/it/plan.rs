@@ -1,0 +1,165 @@
+//! `cam plan` end to end: tool choice, holder policies, outputs and bad input.
+
+use crate::support::{cam, stderr, write};
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn pocket() -> String {
+    root()
+        .join("fixtures/parts/pocket.obj")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+/// One ball:6 tool whose Ø20 holder sits 12 mm above the tip: too short for the 15 mm deep
+/// pocket, whose rim (z = 30) it must clear while the tip is on the floor (z = 15).
+const SHORT_TOOL: &str = r#"{ "units": "mm", "tools": [ {
+  "id": "SHORT", "number": 7, "cutter": { "type": "ball", "diameter": 6 },
+  "flute_length": 10, "shank_diameter": 6, "stick_out": 12, "stick_out_min": 10, "stick_out_max": 30,
+  "holder": [ { "diameter": 20, "length": 20 } ] } ] }"#;
+
+#[test]
+fn holder_fail_policy_exits_1_and_writes_nothing() {
+    let d = tempfile::tempdir().unwrap();
+    let lib = write(d.path(), "lib.json", SHORT_TOOL);
+    let out = d.path().join("p.ngc");
+    let o = cam(&[
+        "plan",
+        &pocket(),
+        "--tool-library",
+        lib.to_str().unwrap(),
+        "--tool",
+        "SHORT",
+        "--scallop",
+        "0.1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("collisions") && e.contains("line"), "{e}");
+    // The holder must clear the rim at z = 30 with the tip on the floor at z = 15.
+    assert!(
+        e.contains("minimum collision-free stick-out 15.000 mm"),
+        "{e}"
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn holder_report_and_avoid_policies_write_gcode() {
+    let d = tempfile::tempdir().unwrap();
+    let lib = write(d.path(), "lib.json", SHORT_TOOL);
+    for policy in ["report", "avoid"] {
+        let out = d.path().join(format!("{policy}.ngc"));
+        let o = cam(&[
+            "plan",
+            &pocket(),
+            "--tool-library",
+            lib.to_str().unwrap(),
+            "--tool",
+            "SHORT",
+            "--scallop",
+            "0.1",
+            "--holder",
+            policy,
+            "-o",
+            out.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(o.status.success(), "{policy}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let g = std::fs::read_to_string(&out).unwrap();
+        assert!(
+            g.contains("T7 M6") && g.contains("G43 H7"),
+            "library tool number used"
+        );
+        match policy {
+            "report" => assert!(j["holder"]["collisions"].as_u64().unwrap() > 0, "{j}"),
+            _ => {
+                assert_eq!(j["holder"]["collisions"], 0, "{j}");
+                assert!(
+                    j["holder"]["removed_cut_length_mm"].as_f64().unwrap() > 0.0,
+                    "{j}"
+                );
+            }
+        }
+        assert!(
+            (j["holder"]["min_stick_out_mm"].as_f64().unwrap() - 15.0).abs() < 1e-6,
+            "{j}"
+        );
+    }
+}
+
+#[test]
+fn plan_defaults_write_a_program() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("p.ngc");
+    let apt = d.path().join("p.apt");
+    let o = cam(&[
+        "plan",
+        &pocket(),
+        "--scallop",
+        "0.1",
+        "-o",
+        out.to_str().unwrap(),
+        "--cl-out",
+        apt.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let g = std::fs::read_to_string(&out).unwrap();
+    for want in [
+        "(CL convention: tool tip)",
+        "G21",
+        "G90",
+        "G17",
+        "G94",
+        "M3",
+        "M30",
+        "(tool: T1 ball:6)",
+    ] {
+        assert!(g.contains(want), "program lacks {want}");
+    }
+    assert!(std::fs::read_to_string(&apt).unwrap().contains("GOTO/"));
+}
+
+#[test]
+fn plan_bad_values_exit_2() {
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("p.ngc");
+    for args in [
+        vec!["--tolerance", "0"],
+        vec!["--scallop", "-1"],
+        vec!["--scallop", "3"],
+        vec!["--tool", "bull:6:4"],
+        vec!["--feed", "nan"],
+        vec!["--stock", "1,0,0,1"],
+        vec!["--tool-library", "/nonexistent.json"],
+    ] {
+        let mut a = vec!["plan", "/dev/null/x.obj"];
+        a[1] = Box::leak(pocket().into_boxed_str());
+        a.extend(args.iter().copied());
+        a.extend(["-o", out.to_str().unwrap()]);
+        let o = cam(&a);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(!out.exists());
+    }
+    let bad = write(
+        d.path(),
+        "lib.json",
+        "{ \"units\": \"mm\", \"tools\": [ { \"id\": 3 } ] }",
+    );
+    let o = cam(&[
+        "plan",
+        &pocket(),
+        "--tool-library",
+        bad.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("lib.json"), "{}", stderr(&o));
+}
