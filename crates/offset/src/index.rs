@@ -264,10 +264,16 @@ impl DropCutter {
             }
             let dx = (t.lo[0] - x).max(x - t.hi[0]).max(0.0);
             let dy = (t.lo[1] - y).max(y - t.hi[1]).max(0.0);
-            if dx * dx + dy * dy > pf.big_r2 {
+            let d2 = dx * dx + dy * dy;
+            if d2 > pf.big_r2 {
                 continue;
             }
+            // Every point of the triangle is at least d from the axis and no higher than
+            // its top, and h never decreases: the contact cannot beat top - h(d).
             let prune = best.max(floor);
+            if d2 > 0.0 && t.top - pf.height(d2.sqrt()) <= prune {
+                continue;
+            }
             for (k, &p) in t.v.iter().enumerate() {
                 if t.owns & (8 << k) != 0 && p.z > best && p.z >= floor {
                     take(
