@@ -8,6 +8,7 @@ mod cl;
 mod exit;
 mod plan;
 mod progress;
+mod verify;
 mod xy_csv;
 
 use std::process::ExitCode;
@@ -28,6 +29,8 @@ enum Command {
     Cl(cl::ClArgs),
     /// Plan finishing passes and write G-code (verified unless --no-verify).
     Plan(plan::PlanArgs),
+    /// Verify a toolpath (G-code or APT) against the part: swept surface, gouge and excess.
+    Verify(verify::VerifyArgs),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +45,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Cl(a) => cl::run(a),
         Command::Plan(a) => plan::run(a),
+        Command::Verify(a) => verify::run(a),
     };
     exit::finish(result)
 }

@@ -80,6 +80,12 @@ pub struct PlanArgs {
     /// Rapid rate (mm/min) used only for the cycle-time estimate.
     #[arg(long, default_value_t = 5000.0)]
     pub rapid_rate: f64,
+    /// Skip the verification of the planned program.
+    #[arg(long)]
+    pub no_verify: bool,
+    /// Verification settings (the gouge tolerance is --tolerance).
+    #[command(flatten)]
+    pub verify: crate::verify::VerifyOpts,
     /// Print a machine-readable summary on stdout.
     #[arg(long)]
     pub json: bool,
@@ -334,6 +340,12 @@ pub fn run(a: PlanArgs) -> Result<()> {
         "unmachined_area_mm2": avoided.as_ref().map(|s| s.unmachined_area_mm2),
         "check_s": t_holder,
     });
+    // Every plan certifies itself: verify the program as read back.
+    let verification = if a.no_verify {
+        None
+    } else {
+        Some(crate::verify::run_verification(&mesh, &readback, &cutter, a.tolerance, &a.verify, a.json)?)
+    };
     let tp = &toolpath;
     let plunge_len = tp.length_where(|k| matches!(k, MoveKind::Plunge | MoveKind::Retract));
     let cut_len = tp.length_where(|k| k == MoveKind::Cut);
@@ -351,6 +363,12 @@ pub fn run(a: PlanArgs) -> Result<()> {
         "unresolved_joins": plan.unresolved_joins,
         "safe_z_mm": plan.safe_z_mm,
         "plan_s": t_plan, "holder": holder_json,
+        "verify": verification.as_ref().map(|v| serde_json::json!({
+            "max_gouge_mm": v.report.max_gouge_mm, "max_excess_mm": v.report.max_excess_mm,
+            "mean_mm": v.report.mean_mm, "p95_mm": v.report.p95_mm, "points": v.report.measured,
+            "unmachined": v.report.unmachined, "within_tolerance": v.report.tolerance_counts.within,
+            "worst_gouge": v.report.worst_gouges.first(), "timings": v.timings,
+        })),
     });
     if a.json {
         println!("{summary}");
@@ -372,8 +390,14 @@ pub fn run(a: PlanArgs) -> Result<()> {
             fmt_stick(&stick),
             a.output.display()
         );
+        if let Some(v) = &verification {
+            eprintln!("cam {}", crate::verify::summary_line(v, a.tolerance));
+        }
     }
-    Ok(())
+    match &verification {
+        Some(v) => crate::verify::verdict(v, a.tolerance),
+        None => Ok(()),
+    }
 }
 
 /// Reads a posted program back (the moves the machine will run, with their lines).

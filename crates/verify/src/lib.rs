@@ -1,1 +1,14 @@
 //! cam-verify: see `docs/architecture.md`.
+pub mod deviation;
+pub mod envelope;
+pub mod heatmap;
+pub mod imprint;
+pub mod pipeline;
+pub mod ply;
+pub mod refine;
+pub mod report;
+pub mod sweep;
+pub mod testpaths;
+pub mod zmap;
+
+pub use pipeline::{Timings, Verification, VerifyConfig, VerifyError, verify};

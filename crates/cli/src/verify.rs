@@ -1,0 +1,182 @@
+//! `cam verify` and the verification `cam plan` runs on what it planned.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use cam_core::{Cutter, Mesh, Toolpath, Units};
+use cam_holder::ToolLibrary;
+use cam_verify::{Verification, VerifyConfig};
+
+use crate::exit::Findings;
+
+/// Verification settings shared by `cam verify` and `cam plan`.
+#[derive(clap::Args, Clone)]
+pub struct VerifyOpts {
+    /// Pseudo-inserts Q per cutter (even, ≥ 4).
+    #[arg(long, default_value_t = 40)]
+    pub inserts: usize,
+    /// Longest step (mm) between swept poses; longer moves are subdivided (tip and axis
+    /// interpolated linearly).
+    #[arg(long, default_value_t = 0.5)]
+    pub max_step: f64,
+    /// Resolution e (mm) of the normal-vector method: the design surface is refined to edges
+    /// of sqrt(6·r·e).
+    #[arg(long, default_value_t = 0.005)]
+    pub resolution: f64,
+    /// Do not sweep the path in reverse to look for back gouges.
+    #[arg(long)]
+    pub no_back_gouge: bool,
+    /// Write the swept surface (.obj, .stl or .ply by extension).
+    #[arg(long)]
+    pub swept: Option<PathBuf>,
+    /// Write the design surface coloured by deviation (.ply: blue excess, green within
+    /// tolerance, red gouge).
+    #[arg(long)]
+    pub deviation: Option<PathBuf>,
+    /// Write a top-view heat map of the deviation with a colour scale (.png).
+    #[arg(long)]
+    pub heatmap: Option<PathBuf>,
+}
+
+/// Arguments of `cam verify`.
+#[derive(clap::Args)]
+pub struct VerifyArgs {
+    /// The toolpath: G-code (.ngc, .nc, .gcode, .tap, ...) or APT CL data (.apt, .cl, .cls).
+    pub toolpath: PathBuf,
+    /// The design part (.obj or .stl).
+    #[arg(long)]
+    pub part: PathBuf,
+    /// Cutter spec (ball:D, flat:D, bull:D:r in mm), or a tool id with --tool-library.
+    #[arg(long)]
+    pub tool: String,
+    /// Tool library (JSON); --tool then names a tool id.
+    #[arg(long)]
+    pub tool_library: Option<PathBuf>,
+    /// Gouge tolerance (mm): exit 1 when a gouge is deeper.
+    #[arg(long, default_value_t = 0.01)]
+    pub tolerance: f64,
+    /// Units of the part file.
+    #[arg(long, default_value = "mm")]
+    pub units: Units,
+    /// Verification settings.
+    #[command(flatten)]
+    pub opts: VerifyOpts,
+    /// Print the report as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Reads a toolpath by extension: APT CL data or G-code.
+fn read_toolpath(path: &Path) -> Result<Toolpath> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    Ok(match ext.as_str() {
+        "apt" | "cl" | "cls" | "cldata" => cam_gcode::read_apt(path)?,
+        _ => cam_gcode::read_gcode(path, &cam_gcode::ReadConfig::default())?,
+    })
+}
+
+/// Runs `cam verify`.
+pub fn run(a: VerifyArgs) -> Result<()> {
+    let mesh = Mesh::load(&a.part, a.units)?;
+    let cutter: Cutter = match &a.tool_library {
+        Some(lib) => {
+            let l = ToolLibrary::load(lib)?;
+            l.get(&a.tool).with_context(|| format!("{}: no tool '{}'", lib.display(), a.tool))?.cutter
+        }
+        None => a.tool.parse()?,
+    };
+    let path = read_toolpath(&a.toolpath)?;
+    let v = run_verification(&mesh, &path, &cutter, a.tolerance, &a.opts, a.json)?;
+    let mut report = serde_json::to_value(&v.report)?;
+    report["toolpath"] = serde_json::json!(a.toolpath);
+    report["part"] = serde_json::json!(a.part);
+    report["tool"] = serde_json::json!(cutter.to_string());
+    report["timings"] = serde_json::to_value(v.timings)?;
+    if a.json {
+        println!("{report}");
+    } else {
+        eprintln!("{}", summary_line(&v, a.tolerance));
+    }
+    verdict(&v, a.tolerance)
+}
+
+/// Runs the verification and writes the optional outputs.
+pub fn run_verification(
+    mesh: &Mesh,
+    path: &Toolpath,
+    cutter: &Cutter,
+    tolerance: f64,
+    o: &VerifyOpts,
+    quiet: bool,
+) -> Result<Verification> {
+    let mut cfg = VerifyConfig::new(tolerance);
+    cfg.sweep.inserts = o.inserts;
+    cfg.sweep.max_step_mm = o.max_step;
+    cfg.resolution_mm = o.resolution;
+    cfg.back_gouge = !o.no_back_gouge;
+    if !(tolerance.is_finite() && tolerance > 0.0) {
+        bail!("--tolerance must be a positive number of mm, got {tolerance}");
+    }
+    let pb = crate::progress::spinner("verifying", quiet);
+    let v = cam_verify::verify(mesh, path, cutter, &cfg)?;
+    pb.finish_and_clear();
+    if let Some(p) = &o.swept {
+        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        cam_core::io::write_atomic(p, |w| match ext.as_str() {
+            "obj" => cam_verify::sweep::write_obj(&v.swept, w),
+            "ply" => cam_verify::sweep::write_ply(&v.swept, w),
+            _ => cam_verify::sweep::write_stl(&v.swept, w),
+        })
+        .with_context(|| format!("{}: cannot write", p.display()))?;
+    }
+    if let Some(p) = &o.deviation {
+        cam_verify::ply::write_deviation_ply(p, &v.refined, &v.deviations, tolerance, cam_verify::ply::PlyFormat::BinaryLittleEndian)?;
+    }
+    if let Some(p) = &o.heatmap {
+        cam_verify::heatmap::write_heatmap(p, &v.refined, &v.deviations, &cam_verify::heatmap::HeatmapConfig::new(tolerance))?;
+    }
+    Ok(v)
+}
+
+/// One line for the terminal.
+pub fn summary_line(v: &Verification, tol: f64) -> String {
+    let r = &v.report;
+    let worst = r.worst_gouges.first().map_or(String::new(), |w| {
+        format!(
+            " (worst at ({:.3}, {:.3}, {:.3}){})",
+            w.position[0],
+            w.position[1],
+            w.position[2],
+            w.line.map_or(String::new(), |l| format!(", line {l}"))
+        )
+    });
+    format!(
+        "verify: max gouge {:.4} mm{worst}, max excess {:.4} mm, {} of {} points within ±{tol} mm, {} unmachined; {:.1} s",
+        r.max_gouge_mm,
+        r.max_excess_mm,
+        r.tolerance_counts.within,
+        r.measured,
+        r.unmachined,
+        v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s
+    )
+}
+
+/// Exit 1 when a gouge exceeds the tolerance.
+pub fn verdict(v: &Verification, tol: f64) -> Result<()> {
+    if v.report.gouge_exceeds(tol) {
+        let w = v.report.worst_gouges.first();
+        return Err(Findings(format!(
+            "gouge of {:.4} mm exceeds the tolerance {tol} mm{}",
+            v.report.max_gouge_mm,
+            w.map_or(String::new(), |w| format!(
+                " at ({:.3}, {:.3}, {:.3}){}",
+                w.position[0],
+                w.position[1],
+                w.position[2],
+                w.line.map_or(String::new(), |l| format!(", toolpath line {l}"))
+            ))
+        ))
+        .into());
+    }
+    Ok(())
+}

@@ -1,0 +1,433 @@
+//! Signed deviation of the design surface from the swept surfaces: the normal-vector method.
+//!
+//! From every vertex `p` of the refined design surface (normal `n`) a vector is grown from
+//! `p − L_in·n` (inside the part) to `p + L_out·n` (outside). The material left along it spans
+//! from its inner start to the **lowest** (most inward) point where it enters the volume
+//! swept by the tool. The signed deviation is that point's distance from `p` along `n`:
+//! negative = gouge (the tool went below the design), positive = excess (material left).
+//!
+//! # Which crossings count
+//! Swept-surface triangles are expected to be oriented with their normals pointing **out of
+//! the tool's swept volume** (towards the material). A vector enters the swept volume where
+//! it crosses a triangle whose normal faces against it (`dot(normal, n) < 0`); crossings with
+//! `dot ≥ 0` are exits (e.g. a steep wall's vector grazing the back of a neighbouring pass's
+//! sweep) and are ignored under [`Facing::AgainstVector`] (the default). [`Facing::Any`]
+//! accepts both, for sweeps of unknown orientation.
+//!
+//! # Limits
+//! A vector with no entry crossing is unmachined (`signed_mm = None`): the excess there is at
+//! least `L_out`. Swept surfaces are open sheets (the tool's envelope, open towards the
+//! spindle), so a vector whose inner start already lies inside the swept volume (a gouge
+//! deeper than `L_in`) may cross nothing and also read as unmachined: choose `L_in` larger
+//! than any gouge worth telling apart (default 1 mm, or 20 × the tolerance).
+
+use cam_core::{DVec3, Triangle};
+use rayon::prelude::*;
+
+use crate::refine::RefinedMesh;
+
+/// Which swept-surface crossings count as entries into the swept volume.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum Facing {
+    /// Only triangles whose normal faces against the vector (`dot < 0`): the swept surface
+    /// seen from outside the tool. Needs triangles oriented out of the swept volume.
+    AgainstVector,
+    /// Every crossing, whatever the triangle's orientation.
+    Any,
+}
+
+/// Settings of the normal-vector method.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct DeviationConfig {
+    /// How far the vector reaches inside the part, `L_in` (mm, default 1).
+    pub inside_mm: f64,
+    /// How far the vector reaches outside the part, `L_out` (mm, default 5).
+    pub outside_mm: f64,
+    /// Which crossings count (default [`Facing::AgainstVector`]).
+    pub facing: Facing,
+}
+
+impl Default for DeviationConfig {
+    fn default() -> Self {
+        DeviationConfig {
+            inside_mm: 1.0,
+            outside_mm: 5.0,
+            facing: Facing::AgainstVector,
+        }
+    }
+}
+
+impl DeviationConfig {
+    /// Default lengths, but with `L_in = max(1 mm, 20 × tolerance)`.
+    pub fn for_tolerance(tolerance_mm: f64) -> Self {
+        DeviationConfig {
+            inside_mm: (20.0 * tolerance_mm).max(1.0),
+            ..Default::default()
+        }
+    }
+}
+
+/// The deviation measured at one vertex of the refined design surface.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Deviation {
+    /// The vertex (mm).
+    pub position: DVec3,
+    /// Its unit normal.
+    pub normal: DVec3,
+    /// Signed deviation along the normal (mm): negative = gouge, positive = excess; `None`
+    /// when no swept surface crosses the vector (unmachined, excess ≥ `L_out`).
+    pub signed_mm: Option<f64>,
+    /// Index of the toolpath move whose swept triangle gave the crossing.
+    pub source_move: Option<u32>,
+}
+
+/// Why deviation could not be measured.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeviationError {
+    /// `source_move` does not give one move index per swept triangle.
+    #[error("{triangles} swept triangles but {moves} move indices")]
+    LengthMismatch {
+        /// Number of swept triangles.
+        triangles: usize,
+        /// Number of move indices.
+        moves: usize,
+    },
+    /// `L_in` or `L_out` is negative or not finite.
+    #[error(
+        "vector lengths must be finite and non-negative (inside {inside_mm}, outside {outside_mm})"
+    )]
+    BadLength {
+        /// `L_in` given (mm).
+        inside_mm: f64,
+        /// `L_out` given (mm).
+        outside_mm: f64,
+    },
+}
+
+/// A bounding-volume hierarchy over triangles for segment queries.
+///
+/// Built by median splits on the longest axis of the centroid bounds (leaves of ≤ 4
+/// triangles); deterministic. Degenerate triangles are kept but never hit.
+#[derive(Debug, Clone)]
+pub struct TriangleBvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+    tris: Vec<Triangle>,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    min: DVec3,
+    max: DVec3,
+    /// Leaf: first index into `order`; inner: index of the left child (right = left + 1).
+    first: u32,
+    /// Leaf: number of triangles (> 0); inner: 0.
+    count: u32,
+}
+
+/// One crossing of a segment with a triangle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    /// Index of the triangle (in the slice the BVH was built from).
+    pub triangle: u32,
+    /// Parameter along the segment: point = origin + t·dir.
+    pub t: f64,
+    /// Dot product of the triangle's unit normal with the (unnormalised) direction.
+    pub facing: f64,
+}
+
+const LEAF: usize = 4;
+
+impl TriangleBvh {
+    /// Builds the hierarchy over `tris` (copied).
+    pub fn new(tris: &[Triangle]) -> TriangleBvh {
+        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+        let cent: Vec<DVec3> = tris
+            .iter()
+            .map(|t| (t.v[0] + t.v[1] + t.v[2]) / 3.0)
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
+        nodes.push(Node {
+            min: DVec3::ZERO,
+            max: DVec3::ZERO,
+            first: 0,
+            count: 0,
+        });
+        let mut stack = vec![(0usize, 0usize, tris.len())];
+        while let Some((ni, lo, hi)) = stack.pop() {
+            let mut bmin = DVec3::splat(f64::INFINITY);
+            let mut bmax = DVec3::splat(f64::NEG_INFINITY);
+            let mut cmin = bmin;
+            let mut cmax = bmax;
+            for &i in &order[lo..hi] {
+                for p in tris[i as usize].v {
+                    bmin = bmin.min(p);
+                    bmax = bmax.max(p);
+                }
+                cmin = cmin.min(cent[i as usize]);
+                cmax = cmax.max(cent[i as usize]);
+            }
+            nodes[ni].min = bmin;
+            nodes[ni].max = bmax;
+            let ext = cmax - cmin;
+            if hi - lo <= LEAF || ext.max_element() <= 0.0 {
+                nodes[ni].first = lo as u32;
+                nodes[ni].count = (hi - lo) as u32;
+                continue;
+            }
+            let axis = if ext.x >= ext.y && ext.x >= ext.z {
+                0
+            } else if ext.y >= ext.z {
+                1
+            } else {
+                2
+            };
+            let mid = (lo + hi) / 2;
+            order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
+                cent[a as usize][axis]
+                    .total_cmp(&cent[b as usize][axis])
+                    .then(a.cmp(&b))
+            });
+            let left = nodes.len();
+            nodes.push(Node {
+                min: DVec3::ZERO,
+                max: DVec3::ZERO,
+                first: 0,
+                count: 0,
+            });
+            nodes.push(Node {
+                min: DVec3::ZERO,
+                max: DVec3::ZERO,
+                first: 0,
+                count: 0,
+            });
+            nodes[ni].first = left as u32;
+            stack.push((left + 1, mid, hi));
+            stack.push((left, lo, mid));
+        }
+        TriangleBvh {
+            nodes,
+            order,
+            tris: tris.to_vec(),
+        }
+    }
+
+    /// The triangles the hierarchy was built from.
+    pub fn triangles(&self) -> &[Triangle] {
+        &self.tris
+    }
+
+    /// Calls `f` for every triangle crossed by the segment `origin + t·dir`, `t ∈ [t0, t1]`
+    /// (in unspecified order). Barycentric tests are inclusive to 1e-12, so a segment through
+    /// a shared edge reports both triangles.
+    pub fn segment_hits(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t0: f64,
+        t1: f64,
+        mut f: impl FnMut(Hit),
+    ) {
+        if self.tris.is_empty() {
+            return;
+        }
+        let inv = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
+        // A median-split tree over at most 2³² triangles is at most 32 levels deep, so the
+        // stack never holds more than 33 entries.
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let ni = stack[top];
+            let n = self.nodes[ni as usize];
+            if !slab(origin, inv, n.min, n.max, t0, t1) {
+                continue;
+            }
+            if n.count > 0 {
+                for &ti in &self.order[n.first as usize..(n.first + n.count) as usize] {
+                    if let Some(h) = intersect(&self.tris[ti as usize], origin, dir, t0, t1) {
+                        f(Hit { triangle: ti, ..h });
+                    }
+                }
+            } else {
+                stack[top] = n.first + 1;
+                stack[top + 1] = n.first;
+                top += 2;
+            }
+        }
+    }
+}
+
+fn slab(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
+    let (mut lo, mut hi) = (t0, t1);
+    for a in 0..3 {
+        if inv[a].is_infinite() {
+            // Segment parallel to this slab: inside or out for all t.
+            if o[a] < min[a] || o[a] > max[a] {
+                return false;
+            }
+            continue;
+        }
+        let ta = (min[a] - o[a]) * inv[a];
+        let tb = (max[a] - o[a]) * inv[a];
+        let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+        // Widen by a relative hair so that rounding never drops a hit on a box face.
+        let pad = 1e-12 * (1.0 + ta.abs().max(tb.abs()));
+        lo = lo.max(ta - pad);
+        hi = hi.min(tb + pad);
+        if lo > hi {
+            return false;
+        }
+    }
+    true
+}
+
+/// Möller–Trumbore segment/triangle intersection with inclusive barycentric bounds.
+pub(crate) fn intersect(tri: &Triangle, o: DVec3, d: DVec3, t0: f64, t1: f64) -> Option<Hit> {
+    const EPS: f64 = 1e-12;
+    let [a, b, c] = tri.v;
+    let e1 = b - a;
+    let e2 = c - a;
+    let pv = d.cross(e2);
+    let det = e1.dot(pv);
+    let scale = e1.length() * e2.length() * d.length();
+    if det.abs() <= 1e-15 * scale || scale == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - a;
+    let u = tv.dot(pv) * inv;
+    if !(-EPS..=1.0 + EPS).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(e1);
+    let v = d.dot(qv) * inv;
+    if v < -EPS || u + v > 1.0 + EPS {
+        return None;
+    }
+    let t = e2.dot(qv) * inv;
+    if t < t0 || t > t1 {
+        return None;
+    }
+    let n = e1.cross(e2);
+    let facing = n.dot(d) / n.length();
+    Some(Hit {
+        triangle: 0,
+        t,
+        facing,
+    })
+}
+
+/// The most inward entry of one vector into the swept volume, as `(t, move)`; `t` is the
+/// signed distance from the vertex along its normal.
+fn vector_deviation(
+    bvh: &TriangleBvh,
+    moves: &[u32],
+    p: DVec3,
+    n: DVec3,
+    cfg: &DeviationConfig,
+) -> (Option<f64>, Option<u32>) {
+    // Lowest entry; ties broken by the smaller triangle index for determinism.
+    let mut best: Option<(f64, u32)> = None;
+    bvh.segment_hits(p, n, -cfg.inside_mm, cfg.outside_mm, |h| {
+        let entry = match cfg.facing {
+            Facing::AgainstVector => h.facing < 0.0,
+            Facing::Any => true,
+        };
+        let better = match best {
+            None => true,
+            Some((bt, bi)) => h.t < bt || (h.t == bt && h.triangle < bi),
+        };
+        if entry && better {
+            best = Some((h.t, h.triangle));
+        }
+    });
+    match best {
+        Some((t, i)) => (Some(t), Some(moves[i as usize])),
+        None => (None, None),
+    }
+}
+
+/// Measures the signed deviation at every vertex of `refined` against the swept surface
+/// `swept` (triangles oriented out of the swept volume), `source_move[i]` being the
+/// toolpath move that produced `swept[i]`. Results are in vertex order; parallel over
+/// vertices and identical for any number of threads.
+///
+/// # Errors
+/// [`DeviationError::LengthMismatch`] if `source_move.len() != swept.len()`;
+/// [`DeviationError::BadLength`] for negative or non-finite vector lengths.
+pub fn measure(
+    refined: &RefinedMesh,
+    swept: &[Triangle],
+    source_move: &[u32],
+    cfg: &DeviationConfig,
+) -> Result<Vec<Deviation>, DeviationError> {
+    let bvh = TriangleBvh::new(swept);
+    measure_with_bvh(refined, &bvh, source_move, cfg)
+}
+
+/// As [`measure`] for a [`crate::sweep::SweptSurface`] (its triangles face away from the
+/// removed volume, as [`Facing::AgainstVector`] expects).
+///
+/// # Errors
+/// As [`measure`].
+pub fn measure_swept(
+    refined: &RefinedMesh,
+    swept: &crate::sweep::SweptSurface,
+    cfg: &DeviationConfig,
+) -> Result<Vec<Deviation>, DeviationError> {
+    measure(refined, &swept.triangles, &swept.source_move, cfg)
+}
+
+/// As [`measure`], with a hierarchy built beforehand (e.g. reused for a reversed sweep).
+///
+/// # Errors
+/// As [`measure`].
+pub fn measure_with_bvh(
+    refined: &RefinedMesh,
+    bvh: &TriangleBvh,
+    source_move: &[u32],
+    cfg: &DeviationConfig,
+) -> Result<Vec<Deviation>, DeviationError> {
+    if source_move.len() != bvh.triangles().len() {
+        return Err(DeviationError::LengthMismatch {
+            triangles: bvh.triangles().len(),
+            moves: source_move.len(),
+        });
+    }
+    let ok = |x: f64| x.is_finite() && x >= 0.0;
+    if !ok(cfg.inside_mm) || !ok(cfg.outside_mm) {
+        return Err(DeviationError::BadLength {
+            inside_mm: cfg.inside_mm,
+            outside_mm: cfg.outside_mm,
+        });
+    }
+    Ok(refined
+        .positions
+        .par_iter()
+        .zip(refined.normals.par_iter())
+        .map(|(&p, &n)| {
+            let (signed_mm, source_move) = vector_deviation(bvh, source_move, p, n, cfg);
+            Deviation {
+                position: p,
+                normal: n,
+                signed_mm,
+                source_move,
+            }
+        })
+        .collect())
+}
+
+/// Merges two measurements of the same refined surface (e.g. forward and reversed sweeps,
+/// or several swept surfaces): per vertex, the lower deviation wins; `None` loses to any
+/// value. Panics never; mismatched lengths merge up to the shorter one.
+pub fn merge_lowest(a: &[Deviation], b: &[Deviation]) -> Vec<Deviation> {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| match (x.signed_mm, y.signed_mm) {
+            (Some(sx), Some(sy)) if sy < sx => *y,
+            (None, Some(_)) => *y,
+            _ => *x,
+        })
+        .collect()
+}

@@ -1,0 +1,190 @@
+//! The whole verification of one toolpath against one part: sweep the cutter (imprint
+//! method), refine the design surface to the paper's edge length, grow normal vectors, cut
+//! them with the swept surface (and, for back gouges, with the path swept in reverse), and
+//! report the signed deviations.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use cam_core::{Cutter, Mesh, Toolpath};
+
+use crate::deviation::{self, Deviation, DeviationConfig, DeviationError, TriangleBvh};
+use crate::refine::{self, RefineConfig, RefineError, RefinedMesh};
+use crate::report::{self, MeasureSettings, ReportConfig, VerifyReport};
+use crate::sweep::{self, SweepConfig, SweptSurface};
+
+/// Everything a verification needs besides the part, the path and the cutter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VerifyConfig {
+    /// Pseudo-inserts, subdivision of long moves, sharp-turn handling.
+    pub sweep: SweepConfig,
+    /// Resolution `e` (mm) of the normal-vector method: design-surface edges are refined to
+    /// `s = sqrt(6·r·e)` (paper §3.4). Default 0.005 mm.
+    pub resolution_mm: f64,
+    /// Gouge tolerance (mm): the report's bands and its pass/fail verdict.
+    pub tolerance_mm: f64,
+    /// Vector lengths inside and outside the part.
+    pub deviation: DeviationConfig,
+    /// Also sweep the path in reverse and merge (back gouges, as the paper suggests).
+    pub back_gouge: bool,
+    /// Cap on refined vertices; beyond it the refinement fails with a clear error.
+    pub max_vertices: Option<usize>,
+}
+
+impl VerifyConfig {
+    /// Defaults for a gouge tolerance (mm): Q = 40, e = 0.005 mm, back gouges on.
+    pub fn new(tolerance_mm: f64) -> VerifyConfig {
+        VerifyConfig {
+            sweep: SweepConfig::default(),
+            resolution_mm: refine::DEFAULT_RESOLUTION_MM,
+            tolerance_mm,
+            deviation: DeviationConfig::for_tolerance(tolerance_mm),
+            back_gouge: true,
+            max_vertices: Some(20_000_000),
+        }
+    }
+}
+
+/// Why a verification could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum VerifyError {
+    /// Impossible settings.
+    #[error("{0}")]
+    Config(String),
+    /// The design surface could not be refined (e.g. too many vertices for the resolution).
+    #[error(transparent)]
+    Refine(#[from] RefineError),
+    /// The deviation measurement rejected its input.
+    #[error(transparent)]
+    Deviation(#[from] DeviationError),
+    /// The toolpath has no feed move to sweep.
+    #[error("the toolpath has no cutting move to verify")]
+    NothingSwept,
+}
+
+/// Seconds spent in each stage.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct Timings {
+    /// Sweeping (forward and reverse).
+    pub sweep_s: f64,
+    /// Refining the design surface.
+    pub refine_s: f64,
+    /// Growing and cutting the vectors.
+    pub measure_s: f64,
+}
+
+/// A finished verification.
+#[derive(Debug, Clone)]
+pub struct Verification {
+    /// The report (JSON-serialisable).
+    pub report: VerifyReport,
+    /// The refined design surface the deviations refer to (vertex by vertex).
+    pub refined: RefinedMesh,
+    /// Signed deviation per refined vertex (negative = gouge).
+    pub deviations: Vec<Deviation>,
+    /// The forward swept surface.
+    pub swept: SweptSurface,
+    /// Stage timings.
+    pub timings: Timings,
+}
+
+/// Verifies `toolpath` (tool-tip poses) cut by `cutter` against `part`.
+///
+/// # Errors
+/// [`VerifyError`] for impossible settings, a design surface too large to refine at the
+/// requested resolution, or a toolpath with nothing to sweep.
+pub fn verify(
+    part: &Mesh,
+    toolpath: &Toolpath,
+    cutter: &Cutter,
+    cfg: &VerifyConfig,
+) -> Result<Verification, VerifyError> {
+    let e = cfg.resolution_mm;
+    if !(e.is_finite() && e > 0.0) {
+        return Err(VerifyError::Config(format!(
+            "resolution {e} mm must be a positive number of mm"
+        )));
+    }
+    let tol = cfg.tolerance_mm;
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(VerifyError::Config(format!(
+            "tolerance {tol} mm must be a positive number of mm"
+        )));
+    }
+    let q = cfg.sweep.inserts;
+    if q < 4 || !q.is_multiple_of(2) {
+        return Err(VerifyError::Config(format!(
+            "inserts {q} must be an even number ≥ 4"
+        )));
+    }
+    let ms = cfg.sweep.max_step_mm;
+    if !(ms.is_finite() && ms > 0.0) {
+        return Err(VerifyError::Config(format!(
+            "max step {ms} mm must be a positive number of mm"
+        )));
+    }
+    let mut timings = Timings::default();
+
+    let t = Instant::now();
+    let swept = sweep::sweep(toolpath, cutter, &cfg.sweep);
+    if swept.triangles.is_empty() {
+        return Err(VerifyError::NothingSwept);
+    }
+    let reverse = cfg.back_gouge.then(|| {
+        sweep::sweep(
+            toolpath,
+            cutter,
+            &SweepConfig {
+                reverse: true,
+                ..cfg.sweep
+            },
+        )
+    });
+    timings.sweep_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let mut rcfg = RefineConfig::for_cutter(cutter, e);
+    rcfg.max_vertices = cfg.max_vertices;
+    // One averaged normal per vertex, creases included: at a convex edge a face normal runs
+    // along the neighbouring face (e.g. the top face's normal at a pocket rim runs down the
+    // wall), where the swept surface of a pass along that face is tangent and any rounding
+    // reads as a gouge. The bisector points into the material.
+    rcfg.crease_angle_deg = 180.0;
+    let refined = refine::refine(part, &rcfg)?;
+    timings.refine_s = t.elapsed().as_secs_f64();
+
+    let t = Instant::now();
+    let bvh = TriangleBvh::new(&swept.triangles);
+    let mut devs = deviation::measure_with_bvh(&refined, &bvh, &swept.source_move, &cfg.deviation)?;
+    if let Some(rev) = &reverse {
+        let bvh = TriangleBvh::new(&rev.triangles);
+        let back = deviation::measure_with_bvh(&refined, &bvh, &rev.source_move, &cfg.deviation)?;
+        devs = deviation::merge_lowest(&devs, &back);
+    }
+    timings.measure_s = t.elapsed().as_secs_f64();
+
+    let lines: Vec<Option<usize>> = toolpath.moves.iter().map(|m| m.line).collect();
+    let mut extra = BTreeMap::new();
+    extra.insert("inserts".to_string(), cfg.sweep.inserts as f64);
+    extra.insert("max_step_mm".to_string(), cfg.sweep.max_step_mm);
+    extra.insert("swept_triangles".to_string(), swept.triangles.len() as f64);
+    extra.insert(
+        "back_gouge".to_string(),
+        if cfg.back_gouge { 1.0 } else { 0.0 },
+    );
+    let settings = MeasureSettings {
+        resolution_mm: e,
+        refine: rcfg,
+        max_edge_used_mm: refined.max_edge_mm,
+        deviation: cfg.deviation,
+        extra,
+    };
+    let report = report::build_report(&devs, &lines, &ReportConfig::new(tol), Some(settings));
+    Ok(Verification {
+        report,
+        refined,
+        deviations: devs,
+        swept,
+        timings,
+    })
+}

@@ -1,0 +1,463 @@
+//! Refinement of the design surface for the normal-vector method (imprint paper §3.4).
+//!
+//! The design mesh is welded (corners with bit-identical coordinates become one vertex),
+//! then refined by conforming longest-edge bisection (Rivara's 4-triangle partition) until no
+//! edge is longer than `s`.
+//! With the paper's rule `s = sqrt(6·r·e)` a sphere of radius `r` (the pseudo-insert radius,
+//! i.e. the cutter's corner radius) cannot sink deeper than `e` into an equilateral triangle
+//! of side `s` without covering one of its vertices, so sampling the vertices bounds the
+//! undetected gouge by `e`.
+//!
+//! Every new vertex is the midpoint of an edge of a triangle that lies inside one original
+//! triangle, so all refined faces lie exactly (up to rounding of midpoints) on the design
+//! surface; `face_source` names that original triangle.
+//!
+//! Vertex normals are angle-weighted averages of the normals of incident faces in the same
+//! smooth group: a face contributes to a corner's normal only when its normal is within
+//! `crease_angle_deg` of the corner's own face normal. Where the groups differ (a crease) the
+//! vertex is duplicated, one copy per distinct normal, so vectors grown from a plane stay
+//! perpendicular to it.
+
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+use cam_core::{Cutter, DVec3, Mesh};
+
+/// What [`refine`] does when the refined mesh would exceed [`RefineConfig::max_vertices`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum CapPolicy {
+    /// Return [`RefineError::TooManyVertices`].
+    Error,
+    /// Retry with the edge length multiplied by 1.25 until the mesh fits; the length used is
+    /// reported in [`RefinedMesh::max_edge_mm`]. Still an error when the design mesh alone
+    /// has more vertices than the cap.
+    Coarsen,
+}
+
+/// Settings of the refinement.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct RefineConfig {
+    /// Longest edge allowed after refinement (mm); see [`max_edge_for`].
+    pub max_edge_mm: f64,
+    /// Faces whose normals differ by more than this angle (degrees) belong to different smooth
+    /// groups at a shared vertex (default 30°).
+    pub crease_angle_deg: f64,
+    /// Largest number of refined vertices (before crease duplication); `None` = no cap.
+    pub max_vertices: Option<usize>,
+    /// What to do when the cap is hit.
+    pub on_cap: CapPolicy,
+}
+
+impl RefineConfig {
+    /// The paper's settings for `cutter` at resolution `resolution_mm` (default 0.005 mm):
+    /// `max_edge_mm = max_edge_for(cutter, resolution_mm)`, 30° creases, a cap of 20 million
+    /// vertices that makes refinement fail rather than coarsen.
+    pub fn for_cutter(cutter: &Cutter, resolution_mm: f64) -> RefineConfig {
+        RefineConfig {
+            max_edge_mm: max_edge_for(cutter, resolution_mm),
+            crease_angle_deg: 30.0,
+            max_vertices: Some(20_000_000),
+            on_cap: CapPolicy::Error,
+        }
+    }
+}
+
+/// Default resolution `e` of the normal-vector method (mm), as in the paper.
+pub const DEFAULT_RESOLUTION_MM: f64 = 0.005;
+
+/// The paper's edge length `s = sqrt(6·r·e)` (mm) for the cutter's corner radius `r` and the
+/// resolution `e` (mm).
+///
+/// A flat end mill has `r = 0`, for which the rule gives no finite length: its cutting edge is
+/// the circle of radius `R` bounding the flat bottom, so the substitute is `r = R` (the
+/// curvature radius of that edge), giving `s = sqrt(6·R·e)`. Callers wanting another length
+/// set [`RefineConfig::max_edge_mm`] directly.
+pub fn max_edge_for(cutter: &Cutter, resolution_mm: f64) -> f64 {
+    let r = if cutter.corner_radius() > 0.0 {
+        cutter.corner_radius()
+    } else {
+        cutter.radius()
+    };
+    (6.0 * r * resolution_mm).sqrt()
+}
+
+/// Why the design surface could not be refined.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RefineError {
+    /// `max_edge_mm` is not a finite positive number.
+    #[error("refinement edge length must be a positive number of mm, got {max_edge_mm}")]
+    BadEdgeLength {
+        /// The value given.
+        max_edge_mm: f64,
+    },
+    /// The refined mesh would have more vertices than allowed ([`CapPolicy::Error`]).
+    #[error(
+        "refining to edges of {max_edge_mm} mm needs more than {cap} vertices \
+         (about {estimated} expected); raise the cap or use a coarser resolution \
+         (edges of about {suggested_max_edge_mm:.4} mm would fit)"
+    )]
+    TooManyVertices {
+        /// The edge length tried (mm).
+        max_edge_mm: f64,
+        /// The cap.
+        cap: usize,
+        /// Rough estimate of the vertices needed (from the surface area).
+        estimated: usize,
+        /// An edge length (mm) whose estimated vertex count is below the cap.
+        suggested_max_edge_mm: f64,
+    },
+}
+
+/// The refined design surface: an indexed mesh with welded vertices and per-vertex normals.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RefinedMesh {
+    /// Vertex positions (mm). A vertex on a crease appears once per smooth group.
+    pub positions: Vec<DVec3>,
+    /// Unit vertex normals, one per position.
+    pub normals: Vec<DVec3>,
+    /// Faces as indices into `positions`, counter-clockwise as in the design mesh.
+    pub triangles: Vec<[u32; 3]>,
+    /// For each face, the index of the design triangle (in `Mesh::triangles`) it lies in.
+    pub face_source: Vec<u32>,
+    /// The longest edge allowed in this refinement (mm): the requested one, or a coarser one
+    /// under [`CapPolicy::Coarsen`].
+    pub max_edge_mm: f64,
+}
+
+impl RefinedMesh {
+    /// Number of vertices.
+    pub fn len(&self) -> usize {
+        self.positions.len()
+    }
+    /// True when there is no vertex (never for a refined [`Mesh`]).
+    pub fn is_empty(&self) -> bool {
+        self.positions.is_empty()
+    }
+}
+
+/// A small deterministic hasher for integer keys (FxHash-style multiply-rotate).
+#[derive(Default)]
+struct IntHasher(u64);
+
+impl Hasher for IntHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(u64::from(b));
+        }
+    }
+    fn write_u64(&mut self, n: u64) {
+        self.0 = (self.0.rotate_left(5) ^ n).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
+
+fn edge_key(a: u32, b: u32) -> u64 {
+    let (lo, hi) = if a < b { (a, b) } else { (b, a) };
+    (u64::from(lo) << 32) | u64::from(hi)
+}
+
+/// Welds the soup into an indexed mesh: bit-identical corners (with -0 read as +0) merge.
+fn weld(mesh: &Mesh) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut map: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut positions = Vec::new();
+    let mut tris = Vec::with_capacity(mesh.len());
+    for t in mesh.triangles() {
+        let mut idx = [0u32; 3];
+        for (k, p) in t.v.iter().enumerate() {
+            let key = [p.x, p.y, p.z].map(|c| (c + 0.0).to_bits());
+            idx[k] = *map.entry(key).or_insert_with(|| {
+                positions.push(*p);
+                (positions.len() - 1) as u32
+            });
+        }
+        tris.push(idx);
+    }
+    (positions, tris)
+}
+
+fn estimate_vertices(area_mm2: f64, s: f64) -> usize {
+    // Longest-edge refinement of typical meshes ends with edges between s/2 and s; a regular
+    // triangulation of edge ~0.7·s has about 2·area/(√3·(0.7 s)²)/2 vertices.
+    let e = 0.7 * s;
+    (area_mm2 / (0.5 * 3f64.sqrt() * e * e)).ceil() as usize
+}
+
+/// Refines the design mesh so that no edge is longer than `cfg.max_edge_mm` and computes
+/// vertex normals (see the module documentation). Deterministic: the same input gives the
+/// same output, bit for bit.
+///
+/// # Errors
+/// [`RefineError::BadEdgeLength`] for a non-positive or non-finite length;
+/// [`RefineError::TooManyVertices`] when the cap is exceeded under [`CapPolicy::Error`].
+pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineError> {
+    if !(cfg.max_edge_mm.is_finite() && cfg.max_edge_mm > 0.0) {
+        return Err(RefineError::BadEdgeLength {
+            max_edge_mm: cfg.max_edge_mm,
+        });
+    }
+    let (welded_pos, welded_tris) = weld(mesh);
+    let area: f64 = mesh.triangles().iter().map(|t| t.area()).sum();
+    let mut s = cfg.max_edge_mm;
+    loop {
+        match split_edges(&welded_pos, &welded_tris, s, cfg.max_vertices) {
+            Ok((pos, tris, src)) => {
+                let (positions, normals, triangles) =
+                    vertex_normals(mesh, &pos, &tris, &src, cfg.crease_angle_deg);
+                return Ok(RefinedMesh {
+                    positions,
+                    normals,
+                    triangles,
+                    face_source: src,
+                    max_edge_mm: s,
+                });
+            }
+            Err(cap) => {
+                // Coarsening cannot help once the design's own vertices exceed the cap.
+                let hopeless = welded_pos.len() > cap;
+                if cfg.on_cap == CapPolicy::Coarsen && !hopeless {
+                    s *= 1.25;
+                    continue;
+                }
+                let estimated = estimate_vertices(area, s);
+                let mut suggested = s;
+                for _ in 0..400 {
+                    if estimate_vertices(area, suggested) <= cap {
+                        break;
+                    }
+                    suggested *= 1.1;
+                }
+                return Err(RefineError::TooManyVertices {
+                    max_edge_mm: s,
+                    cap,
+                    estimated: estimated.max(cap + 1),
+                    suggested_max_edge_mm: suggested,
+                });
+            }
+        }
+    }
+}
+
+/// The index `k` of the longest edge `t[k] → t[k+1]` of a face; ties go to the smaller edge
+/// key, so the choice does not depend on how the face's corners are rotated.
+fn longest_edge(pos: &[DVec3], t: &[u32; 3]) -> usize {
+    let mut best = 0;
+    let mut best_len = -1.0;
+    let mut best_key = u64::MAX;
+    for k in 0..3 {
+        let (a, b) = (t[k], t[(k + 1) % 3]);
+        let l = pos[a as usize].distance_squared(pos[b as usize]);
+        let key = edge_key(a, b);
+        if l > best_len || (l == best_len && key < best_key) {
+            best = k;
+            best_len = l;
+            best_key = key;
+        }
+    }
+    best
+}
+
+/// Conforming longest-edge refinement (Rivara's 4-triangle longest-edge partition), in
+/// rounds: every face whose longest edge exceeds `s` marks that edge; then, until nothing
+/// changes, every face with a marked edge also marks its longest edge (conformity closure).
+/// Each marked face is bisected at the midpoint `M` of its longest edge, and `M` is joined to
+/// the midpoints of its other marked edges (2, 3 or 4 children). Shared edges get one
+/// midpoint, so the mesh stays conforming; the partition keeps angles bounded away from zero
+/// (no slivers from repeated closure). Returns `Err(cap)` when the vertex count passes the cap.
+#[allow(clippy::type_complexity)]
+fn split_edges(
+    pos0: &[DVec3],
+    tris0: &[[u32; 3]],
+    s: f64,
+    cap: Option<usize>,
+) -> Result<(Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>), usize> {
+    let s2 = s * s;
+    let mut pos = pos0.to_vec();
+    if let Some(c) = cap
+        && pos.len() > c
+    {
+        return Err(c);
+    }
+    // A face whose longest edge is ≤ s is final: only edges longer than s are ever split.
+    // Only the others (`active`) are revisited.
+    let mut done: Vec<[u32; 3]> = Vec::with_capacity(tris0.len());
+    let mut done_src: Vec<u32> = Vec::with_capacity(tris0.len());
+    let mut tris = tris0.to_vec();
+    let mut src: Vec<u32> = (0..tris0.len() as u32).collect();
+    loop {
+        let mut active = Vec::with_capacity(tris.len());
+        let mut active_src = Vec::with_capacity(tris.len());
+        let mut longest = Vec::with_capacity(tris.len());
+        for (t, &sidx) in tris.iter().zip(&src) {
+            let k = longest_edge(&pos, t);
+            if pos[t[k] as usize].distance_squared(pos[t[(k + 1) % 3] as usize]) > s2 {
+                active.push(*t);
+                active_src.push(sidx);
+                longest.push(k);
+            } else {
+                done.push(*t);
+                done_src.push(sidx);
+            }
+        }
+        if active.is_empty() {
+            return Ok((pos, done, done_src));
+        }
+        let mut marked: IntMap<u64, u32> = IntMap::default();
+        for (t, &k) in active.iter().zip(&longest) {
+            marked.insert(edge_key(t[k], t[(k + 1) % 3]), u32::MAX);
+        }
+        // Closure: a face with any marked edge marks its longest one. (A marked edge is
+        // longer than s, so a face holding it has a longest edge longer than s and marked
+        // itself: this loop only guards the invariant.)
+        loop {
+            let mut changed = false;
+            for (t, &k) in active.iter().zip(&longest) {
+                let lk = edge_key(t[k], t[(k + 1) % 3]);
+                if marked.contains_key(&lk) {
+                    continue;
+                }
+                if (0..3).any(|j| marked.contains_key(&edge_key(t[j], t[(j + 1) % 3]))) {
+                    marked.insert(lk, u32::MAX);
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        // Midpoints, numbered in face order for determinism.
+        for t in &active {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                if let Some(m) = marked.get_mut(&edge_key(a, b))
+                    && *m == u32::MAX
+                {
+                    pos.push(0.5 * (pos[a as usize] + pos[b as usize]));
+                    *m = (pos.len() - 1) as u32;
+                }
+            }
+            if let Some(c) = cap
+                && pos.len() > c
+            {
+                return Err(c);
+            }
+        }
+        let mut nt = Vec::with_capacity(active.len() * 3);
+        let mut ns = Vec::with_capacity(active.len() * 3);
+        for ((t, &k), &sidx) in active.iter().zip(&longest).zip(&active_src) {
+            let before = nt.len();
+            let (a, b, c) = (t[k], t[(k + 1) % 3], t[(k + 2) % 3]);
+            let m = marked.get(&edge_key(a, b)).copied().unwrap_or(u32::MAX);
+            // Child (a, m, c), split again at a marked c–a.
+            match marked.get(&edge_key(c, a)) {
+                Some(&p) => nt.extend([[a, m, p], [m, c, p]]),
+                None => nt.push([a, m, c]),
+            }
+            // Child (m, b, c), split again at a marked b–c.
+            match marked.get(&edge_key(b, c)) {
+                Some(&q) => nt.extend([[m, b, q], [m, q, c]]),
+                None => nt.push([m, b, c]),
+            }
+            ns.extend(std::iter::repeat_n(sidx, nt.len() - before));
+        }
+        tris = nt;
+        src = ns;
+    }
+}
+
+fn corner_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+    let (u, v) = (b - a, c - a);
+    u.cross(v).length().atan2(u.dot(v))
+}
+
+/// Vertex normals by smooth groups; duplicates vertices on creases.
+fn vertex_normals(
+    mesh: &Mesh,
+    pos: &[DVec3],
+    tris: &[[u32; 3]],
+    src: &[u32],
+    crease_deg: f64,
+) -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
+    let cos_crease = crease_deg.to_radians().cos();
+    let design = mesh.triangles();
+    let face_n: Vec<DVec3> = src
+        .iter()
+        .map(|&s| design[s as usize].normal().unwrap_or(DVec3::Z))
+        .collect();
+    // Incidence in CSR form: corners (face, k) per vertex, in face order.
+    let mut start = vec![0u32; pos.len() + 1];
+    for t in tris {
+        for &v in t {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for i in 0..pos.len() {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut corners = vec![(0u32, 0u8); tris.len() * 3];
+    for (f, t) in tris.iter().enumerate() {
+        for (k, &v) in t.iter().enumerate() {
+            corners[fill[v as usize] as usize] = (f as u32, k as u8);
+            fill[v as usize] += 1;
+        }
+    }
+    let angle = |f: u32, k: u8| {
+        let t = tris[f as usize];
+        let k = k as usize;
+        corner_angle(
+            pos[t[k] as usize],
+            pos[t[(k + 1) % 3] as usize],
+            pos[t[(k + 2) % 3] as usize],
+        )
+    };
+    let mut out_pos = Vec::with_capacity(pos.len());
+    let mut out_n = Vec::with_capacity(pos.len());
+    let mut out_tris = tris.to_vec();
+    let mut local: Vec<(DVec3, u32)> = Vec::new();
+    for v in 0..pos.len() {
+        let cs = &corners[start[v] as usize..start[v + 1] as usize];
+        if cs.is_empty() {
+            continue;
+        }
+        let all_same = cs
+            .iter()
+            .all(|&(f, _)| face_n[f as usize] == face_n[cs[0].0 as usize]);
+        if all_same {
+            let idx = out_pos.len() as u32;
+            out_pos.push(pos[v]);
+            out_n.push(face_n[cs[0].0 as usize]);
+            for &(f, k) in cs {
+                out_tris[f as usize][k as usize] = idx;
+            }
+            continue;
+        }
+        local.clear();
+        for &(f, k) in cs {
+            let nf = face_n[f as usize];
+            let mut sum = DVec3::ZERO;
+            for &(g, j) in cs {
+                let ng = face_n[g as usize];
+                if ng.dot(nf) >= cos_crease {
+                    sum += angle(g, j) * ng;
+                }
+            }
+            let n = sum.try_normalize().unwrap_or(nf);
+            let idx = match local.iter().find(|(m, _)| *m == n) {
+                Some(&(_, i)) => i,
+                None => {
+                    let i = out_pos.len() as u32;
+                    out_pos.push(pos[v]);
+                    out_n.push(n);
+                    local.push((n, i));
+                    i
+                }
+            };
+            out_tris[f as usize][k as usize] = idx;
+        }
+    }
+    (out_pos, out_n, out_tris)
+}

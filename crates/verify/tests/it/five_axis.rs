@@ -1,0 +1,152 @@
+//! 5-axis swept surfaces against the brute-force envelope (many exact tool instances):
+//! paths with lead, tilt and a rotating axis over a plane, a cylinder and a twisted blade,
+//! the paper's bull cutter R = 16, r = 3 (bull:38:3).
+//!
+//! What is measured (see `envelope::sweep_error` and `envelope::line_error`):
+//! - vertices: imprint points against the local envelope (moves ±1). They lie on the tool at
+//!   their pose, so the error is how far off the characteristic curve they are (motion
+//!   direction by central differences, pose spacing) — independent of Q.
+//! - centroids: strip triangle centroids against the local envelope: the chord (sagitta) error
+//!   of the piecewise-linear joining, across the imprint curve (set by Q) and along the motion
+//!   (set by the pose spacing).
+//! - lines: first hits along the design surface's normals on the forward ∪ reverse sweep
+//!   against the envelope's — what the normal-vector deviation sees.
+
+use cam_core::Cutter;
+use cam_verify::envelope::{BruteEnvelope, EnvelopeConfig, line_error, sweep_error};
+use cam_verify::sweep::{SweepConfig, sweep};
+use cam_verify::testpaths::{PassSpec, TestSurface, normal_lines, pass};
+
+struct Row {
+    q: usize,
+    vert_um: f64,
+    cent_um: f64,
+    line_um: f64,
+    line_rms_um: f64,
+}
+
+fn measure(surface: TestSurface, v: f64) -> Vec<Row> {
+    let cutter = Cutter::bull(38.0, 3.0).unwrap();
+    let (poses, step) = (16, 1.5);
+    let spec = PassSpec {
+        surface,
+        v_mm: v,
+        u0_mm: 0.0,
+        poses,
+        step_mm: step,
+        lead_deg: 8.0,
+        lead_wobble_deg: 2.0,
+        wobble_period_mm: 30.0,
+        tilt_deg: 3.0,
+    };
+    let path = pass(&spec, &cutter);
+    let env = BruteEnvelope::new(
+        &path,
+        &cutter,
+        &EnvelopeConfig {
+            instances_per_move: 48,
+            ..Default::default()
+        },
+    );
+    let u_end = (poses - 1) as f64 * step;
+    let lines = normal_lines(&surface, (6.0, u_end - 6.0), (v - 8.0, v + 8.0), 5, 9, 2.0);
+    [10, 20, 40, 80]
+        .into_iter()
+        .map(|q| {
+            let cfg = SweepConfig {
+                inserts: q,
+                max_step_mm: 0.25,
+                ..SweepConfig::default()
+            };
+            let fwd = sweep(&path, &cutter, &cfg);
+            let rev = sweep(
+                &path,
+                &cutter,
+                &SweepConfig {
+                    reverse: true,
+                    ..cfg
+                },
+            );
+            let e = sweep_error(&fwd, &env, 7, 1);
+            let l = line_error(&[&fwd, &rev], &env, &lines, 40.0, 1e-9);
+            assert_eq!(
+                l.disagreements + l.misses,
+                0,
+                "Q {q}: {:?} {:?}",
+                l.disagreeing,
+                l.disagreeing.iter().map(|d| lines[d.0]).collect::<Vec<_>>()
+            );
+            Row {
+                q,
+                vert_um: 1e3 * e.vertices.max_abs_mm,
+                cent_um: 1e3 * e.centroids.max_abs_mm,
+                line_um: 1e3 * l.stats.max_abs_mm,
+                line_rms_um: 1e3 * l.stats.rms_mm,
+            }
+        })
+        .collect()
+}
+
+/// Asserts what holds (numbers as measured on 2026-11-22, printed with `--nocapture`):
+/// along the design normals (what deviation checking sees) the swept surface agrees with the
+/// envelope with an error that shrinks strictly and at second order with Q (the chord error
+/// of `Q/2 + 1` points per imprint curve). The 2 µm at Q = 40 is NOT met: Q = 40
+/// gives 30–41 µm max, 15–18 µm rms; Q = 80 gives 9–14 µm max (see the report).
+/// Vertices and centroids against the local envelope are printed, not asserted: their
+/// maxima come from the tool's sides near the demarcations, where the rotating tool's
+/// characteristic leaves the corner torus (onto the cylinder or across the flat bottom) and
+/// the imprint point is clamped; those parts are walls hidden behind the first hits.
+fn check(name: &str, rows: &[Row]) {
+    for r in rows {
+        println!(
+            "{name:>8} Q {:>2}: vertices {:8.3} um, centroids {:8.3} um, lines max {:8.3} um rms {:8.3} um",
+            r.q, r.vert_um, r.cent_um, r.line_um, r.line_rms_um
+        );
+    }
+    for w in rows.windows(2) {
+        assert!(
+            w[1].line_um < w[0].line_um,
+            "{name}: line error does not shrink from Q {} to {}",
+            w[0].q,
+            w[1].q
+        );
+        assert!(
+            w[1].line_rms_um < w[0].line_rms_um,
+            "{name}: rms does not shrink from Q {} to {}",
+            w[0].q,
+            w[1].q
+        );
+    }
+    let (q40, q80) = (&rows[2], &rows[3]);
+    assert!(
+        q80.line_rms_um * 3.0 <= q40.line_rms_um,
+        "{name}: not second order from Q 40 to 80"
+    );
+    assert!(q80.line_um <= 15.0, "{name}: {} um at Q = 80", q80.line_um);
+}
+
+#[test]
+fn plane_with_lead_tilt_and_rotating_axis() {
+    check("plane", &measure(TestSurface::Plane, 0.0));
+}
+
+#[test]
+fn cylinder_with_lead_tilt_and_rotating_axis() {
+    check(
+        "cylinder",
+        &measure(TestSurface::Cylinder { radius_mm: 80.0 }, 0.0),
+    );
+}
+
+#[test]
+fn twisted_blade_with_lead_tilt_and_rotating_axis() {
+    check(
+        "blade",
+        &measure(
+            TestSurface::Blade {
+                twist_rad_per_mm: 0.004,
+            },
+            20.0,
+        ),
+    );
+}

@@ -1,0 +1,9 @@
+//! cam-verify integration tests: one binary, one module per topic.
+
+mod deviation;
+mod five_axis;
+mod imprint;
+mod refine;
+mod report;
+mod sweep;
+mod zmap;

@@ -1,0 +1,339 @@
+//! Refinement of the design surface: edge bound, surface preservation, conformity, normals.
+
+use std::collections::HashMap;
+
+use cam_core::{Cutter, DVec3, Mesh, Triangle};
+use cam_verify::refine::{self, CapPolicy, RefineConfig, RefineError, RefinedMesh};
+
+fn cfg(s: f64) -> RefineConfig {
+    RefineConfig {
+        max_edge_mm: s,
+        crease_angle_deg: 30.0,
+        max_vertices: None,
+        on_cap: CapPolicy::Error,
+    }
+}
+
+fn mesh(tris: Vec<Triangle>) -> Mesh {
+    Mesh::from_triangles(tris, "<memory>").unwrap()
+}
+
+/// An axis-aligned box, outward normals.
+pub fn cube(size: f64) -> Mesh {
+    let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z) * size;
+    let quads = [
+        [p(0., 0., 0.), p(0., 1., 0.), p(1., 1., 0.), p(1., 0., 0.)], // -Z
+        [p(0., 0., 1.), p(1., 0., 1.), p(1., 1., 1.), p(0., 1., 1.)], // +Z
+        [p(0., 0., 0.), p(1., 0., 0.), p(1., 0., 1.), p(0., 0., 1.)], // -Y
+        [p(0., 1., 0.), p(0., 1., 1.), p(1., 1., 1.), p(1., 1., 0.)], // +Y
+        [p(0., 0., 0.), p(0., 0., 1.), p(0., 1., 1.), p(0., 1., 0.)], // -X
+        [p(1., 0., 0.), p(1., 1., 0.), p(1., 1., 1.), p(1., 0., 1.)], // +X
+    ];
+    let mut t = Vec::new();
+    for q in quads {
+        t.push(Triangle::new(q[0], q[1], q[2]));
+        t.push(Triangle::new(q[0], q[2], q[3]));
+    }
+    mesh(t)
+}
+
+fn edges_ok(r: &RefinedMesh, s: f64) -> f64 {
+    let mut longest: f64 = 0.0;
+    for t in &r.triangles {
+        for k in 0..3 {
+            let d = r.positions[t[k] as usize].distance(r.positions[t[(k + 1) % 3] as usize]);
+            longest = longest.max(d);
+        }
+    }
+    assert!(longest <= s * (1.0 + 1e-12), "edge {longest} > s = {s}");
+    longest
+}
+
+/// Every refined face lies in its source triangle: on its plane and inside it.
+fn on_source(r: &RefinedMesh, m: &Mesh) {
+    let src = m.triangles();
+    let mut area = vec![0.0; src.len()];
+    for (t, &s) in r.triangles.iter().zip(&r.face_source) {
+        let o = src[s as usize];
+        let n = o.normal().unwrap();
+        let [a, b, c] = o.v;
+        for &vi in t {
+            let p = r.positions[vi as usize];
+            assert!(
+                (p - a).dot(n).abs() <= 1e-12 * (1.0 + a.length()),
+                "off plane by {}",
+                (p - a).dot(n)
+            );
+            // Barycentric coordinates by sub-areas.
+            let full = (b - a).cross(c - a).dot(n);
+            let wa = (b - p).cross(c - p).dot(n) / full;
+            let wb = (c - p).cross(a - p).dot(n) / full;
+            let wc = (a - p).cross(b - p).dot(n) / full;
+            assert!(
+                wa >= -1e-12 && wb >= -1e-12 && wc >= -1e-12,
+                "outside source: {wa} {wb} {wc}"
+            );
+        }
+        let f = Triangle::new(
+            r.positions[t[0] as usize],
+            r.positions[t[1] as usize],
+            r.positions[t[2] as usize],
+        );
+        // Orientation kept.
+        assert!(f.cross().dot(n) > 0.0, "face flipped");
+        area[s as usize] += f.area();
+    }
+    for (o, a) in src.iter().zip(area) {
+        assert!(
+            (a - o.area()).abs() <= 1e-9 * o.area(),
+            "area {a} vs {}",
+            o.area()
+        );
+    }
+}
+
+#[test]
+fn paper_edge_length() {
+    // s = sqrt(6 r e): ball:6 (r = 3) at e = 0.005 gives sqrt(0.09) = 0.3.
+    cam_core::assert_near!(
+        refine::max_edge_for(&Cutter::ball(6.0).unwrap(), 0.005),
+        0.3,
+        1e-15
+    );
+    cam_core::assert_near!(
+        refine::max_edge_for(&Cutter::bull(10.0, 2.0).unwrap(), 0.005),
+        0.06f64.sqrt(),
+        1e-15
+    );
+    // Flat: substitute r = R.
+    cam_core::assert_near!(
+        refine::max_edge_for(&Cutter::flat(10.0).unwrap(), 0.005),
+        0.15f64.sqrt(),
+        1e-15
+    );
+    let c = RefineConfig::for_cutter(&Cutter::ball(6.0).unwrap(), 0.005);
+    cam_core::assert_near!(c.max_edge_mm, 0.3, 1e-15);
+    assert_eq!(c.crease_angle_deg, 30.0);
+}
+
+#[test]
+fn edges_bounded_and_surface_preserved() {
+    let m = mesh(vec![
+        Triangle::new(
+            DVec3::new(0., 0., 0.),
+            DVec3::new(7., 0.5, 1.),
+            DVec3::new(2., 5., 2.),
+        ),
+        Triangle::new(
+            DVec3::new(7., 0.5, 1.),
+            DVec3::new(9., 6., -1.),
+            DVec3::new(2., 5., 2.),
+        ),
+        // A sliver: long and thin.
+        Triangle::new(
+            DVec3::new(0., 0., 0.),
+            DVec3::new(2., 5., 2.),
+            DVec3::new(-8., 3., 0.1),
+        ),
+    ]);
+    for s in [2.0, 0.37, 0.15] {
+        let r = refine::refine(&m, &cfg(s)).unwrap();
+        let longest = edges_ok(&r, s);
+        assert!(
+            longest > 0.4 * s,
+            "over-refined: longest edge {longest} for s = {s}"
+        );
+        on_source(&r, &m);
+        assert_eq!(r.max_edge_mm, s);
+        assert_eq!(r.normals.len(), r.positions.len());
+        for n in &r.normals {
+            cam_core::assert_near!(n.length(), 1.0, 1e-12);
+        }
+    }
+}
+
+#[test]
+fn cube_stays_conforming_with_crease_normals() {
+    let m = cube(10.0);
+    let r = refine::refine(&m, &cfg(1.3)).unwrap();
+    edges_ok(&r, 1.3);
+    on_source(&r, &m);
+    // Conforming and closed: every edge (by position) is used by exactly two faces, once in
+    // each direction.
+    let key = |p: DVec3| [p.x, p.y, p.z].map(|c| (c * 1e6).round() as i64);
+    let mut uses: HashMap<([i64; 3], [i64; 3]), i32> = HashMap::new();
+    for t in &r.triangles {
+        for k in 0..3 {
+            let (a, b) = (
+                key(r.positions[t[k] as usize]),
+                key(r.positions[t[(k + 1) % 3] as usize]),
+            );
+            *uses.entry((a, b)).or_default() += 1;
+        }
+    }
+    for (&(a, b), &n) in &uses {
+        assert_eq!(n, 1, "directed edge used {n} times");
+        assert_eq!(
+            uses.get(&(b, a)),
+            Some(&1),
+            "edge {a:?}-{b:?} has no twin: T-junction or hole"
+        );
+    }
+    // Crease normals: every face's corners carry exactly the face's normal.
+    for (t, &s) in r.triangles.iter().zip(&r.face_source) {
+        let n = m.triangles()[s as usize].normal().unwrap();
+        for &v in t {
+            assert_eq!(r.normals[v as usize], n);
+        }
+    }
+    // The 8 corners appear 3 times each (one per face group); edge vertices twice.
+    let mut copies: HashMap<[i64; 3], usize> = HashMap::new();
+    for p in &r.positions {
+        *copies.entry(key(*p)).or_default() += 1;
+    }
+    assert_eq!(copies.get(&key(DVec3::ZERO)), Some(&3));
+    assert_eq!(copies.get(&key(DVec3::new(10., 10., 10.))), Some(&3));
+    assert_eq!(copies.get(&key(DVec3::new(5., 0., 0.))), Some(&2));
+}
+
+#[test]
+fn smooth_normals_on_a_faceted_cylinder() {
+    // 64 facets, dihedral 5.6° < 30°: one smooth group; normals on the facet lines are radial.
+    let (rad, segs, hgt) = (5.0, 64, 4.0);
+    let at = |k: usize, z: f64| {
+        // k % segs: the seam must repeat the first column bit for bit to be welded.
+        let a = std::f64::consts::TAU * (k % segs) as f64 / segs as f64;
+        DVec3::new(rad * a.cos(), rad * a.sin(), z)
+    };
+    let mut t = Vec::new();
+    for k in 0..segs {
+        let (a0, a1, b0, b1) = (at(k, 0.0), at(k + 1, 0.0), at(k, hgt), at(k + 1, hgt));
+        t.push(Triangle::new(a0, a1, b1));
+        t.push(Triangle::new(a0, b1, b0));
+    }
+    let m = mesh(t);
+    let r = refine::refine(&m, &cfg(0.3)).unwrap();
+    edges_ok(&r, 0.3);
+    on_source(&r, &m);
+    let mut on_line = 0;
+    for (p, n) in r.positions.iter().zip(&r.normals) {
+        let ang =
+            p.y.atan2(p.x).rem_euclid(std::f64::consts::TAU) / std::f64::consts::TAU * segs as f64;
+        if (ang - ang.round()).abs() < 1e-9 {
+            on_line += 1;
+            let radial = DVec3::new(p.x, p.y, 0.0).normalize();
+            assert!(
+                (*n - radial).length() < 1e-9,
+                "normal {n:?} at {p:?} not radial"
+            );
+        } else {
+            // Inside a facet: the facet normal, perpendicular to the facet's mid-radial.
+            let k = ang.floor();
+            let mid = std::f64::consts::TAU * (k + 0.5) / segs as f64;
+            let fnorm = DVec3::new(mid.cos(), mid.sin(), 0.0);
+            assert!(
+                (*n - fnorm).length() < 1e-9,
+                "normal {n:?} at {p:?} not the facet's"
+            );
+        }
+    }
+    assert!(
+        on_line >= segs * 14,
+        "only {on_line} vertices on facet lines"
+    );
+    // No duplicates: smooth, so every position occurs once.
+    let mut seen = std::collections::HashSet::new();
+    for p in &r.positions {
+        assert!(
+            seen.insert([p.x, p.y, p.z].map(f64::to_bits)),
+            "duplicated vertex at {p:?}"
+        );
+    }
+}
+
+#[test]
+fn deterministic() {
+    let m = cube(7.0);
+    let a = refine::refine(&m, &cfg(0.9)).unwrap();
+    let b = refine::refine(&m, &cfg(0.9)).unwrap();
+    assert_eq!(a, b);
+}
+
+#[test]
+fn vertex_cap_errors_or_coarsens() {
+    let m = cube(10.0);
+    let capped = RefineConfig {
+        max_vertices: Some(2000),
+        ..cfg(0.2)
+    };
+    match refine::refine(&m, &capped) {
+        Err(RefineError::TooManyVertices {
+            cap,
+            suggested_max_edge_mm,
+            ..
+        }) => {
+            assert_eq!(cap, 2000);
+            assert!(suggested_max_edge_mm > 0.2);
+        }
+        other => panic!("expected TooManyVertices, got {other:?}"),
+    }
+    let coarse = refine::refine(
+        &m,
+        &RefineConfig {
+            on_cap: CapPolicy::Coarsen,
+            ..capped
+        },
+    )
+    .unwrap();
+    assert!(coarse.max_edge_mm > 0.2);
+    // A cap below the design's own 8 vertices fails even when coarsening.
+    let tiny = RefineConfig {
+        max_vertices: Some(5),
+        on_cap: CapPolicy::Coarsen,
+        ..cfg(0.2)
+    };
+    assert!(matches!(
+        refine::refine(&m, &tiny),
+        Err(RefineError::TooManyVertices { cap: 5, .. })
+    ));
+    edges_ok(&coarse, coarse.max_edge_mm);
+    // The cap counts welded vertices before crease duplication (≤ 3 copies here).
+    assert!(coarse.len() <= 3 * 2000);
+    assert!(matches!(
+        refine::refine(&m, &cfg(0.0)),
+        Err(RefineError::BadEdgeLength { .. })
+    ));
+    assert!(matches!(
+        refine::refine(&m, &cfg(f64::NAN)),
+        Err(RefineError::BadEdgeLength { .. })
+    ));
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+    /// Any non-degenerate pair of triangles sharing an edge, any edge length: edges bounded,
+    /// faces inside their source triangles, areas kept, the shared edge conforming.
+    #[test]
+    fn refinement_invariants(c in proptest::collection::vec(-5.0f64..5.0, 12), s in 0.3f64..3.0) {
+        let p = |i: usize| DVec3::new(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
+        let tris = vec![Triangle::new(p(0), p(1), p(2)), Triangle::new(p(0), p(3), p(1))];
+        proptest::prop_assume!(tris.iter().all(|t| !t.is_degenerate() && t.area() > 0.5));
+        let m = mesh(tris);
+        let r = refine::refine(&m, &cfg(s)).unwrap();
+        edges_ok(&r, s);
+        on_source(&r, &m);
+        // Vertices on the shared edge p0–p1: the same set seen from both faces.
+        let on_edge = |f: u32| {
+            let mut v: Vec<[u64; 3]> = r.triangles.iter().zip(&r.face_source)
+                .filter(|(_, src)| **src == f)
+                .flat_map(|(t, _)| t.iter().map(|&i| r.positions[i as usize]))
+                .filter(|q| (*q - p(0)).cross(p(1) - p(0)).length() <= 1e-9 * (p(1) - p(0)).length())
+                .map(|q| [q.x, q.y, q.z].map(f64::to_bits))
+                .collect();
+            v.sort();
+            v.dedup();
+            v
+        };
+        proptest::prop_assert_eq!(on_edge(0), on_edge(1));
+    }
+}
