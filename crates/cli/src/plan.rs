@@ -344,7 +344,14 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let verification = if a.no_verify {
         None
     } else {
-        Some(crate::verify::run_verification(&mesh, &readback, &cutter, a.tolerance, &a.verify, a.json)?)
+        Some(crate::verify::run_verification(
+            &mesh,
+            &readback,
+            &cutter,
+            a.tolerance,
+            &a.verify,
+            a.json,
+        )?)
     };
     let tp = &toolpath;
     let plunge_len = tp.length_where(|k| matches!(k, MoveKind::Plunge | MoveKind::Retract));

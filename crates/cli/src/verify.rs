@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 use cam_core::{Cutter, Mesh, Toolpath, Units};
 use cam_holder::ToolLibrary;
 use cam_verify::{Verification, VerifyConfig};
@@ -68,7 +68,11 @@ pub struct VerifyArgs {
 
 /// Reads a toolpath by extension: APT CL data or G-code.
 fn read_toolpath(path: &Path) -> Result<Toolpath> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     Ok(match ext.as_str() {
         "apt" | "cl" | "cls" | "cldata" => cam_gcode::read_apt(path)?,
         _ => cam_gcode::read_gcode(path, &cam_gcode::ReadConfig::default())?,
@@ -81,7 +85,9 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     let cutter: Cutter = match &a.tool_library {
         Some(lib) => {
             let l = ToolLibrary::load(lib)?;
-            l.get(&a.tool).with_context(|| format!("{}: no tool '{}'", lib.display(), a.tool))?.cutter
+            l.get(&a.tool)
+                .with_context(|| format!("{}: no tool '{}'", lib.display(), a.tool))?
+                .cutter
         }
         None => a.tool.parse()?,
     };
@@ -121,7 +127,11 @@ pub fn run_verification(
     let v = cam_verify::verify(mesh, path, cutter, &cfg)?;
     pb.finish_and_clear();
     if let Some(p) = &o.swept {
-        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let ext = p
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
         cam_core::io::write_atomic(p, |w| match ext.as_str() {
             "obj" => cam_verify::sweep::write_obj(&v.swept, w),
             "ply" => cam_verify::sweep::write_ply(&v.swept, w),
@@ -130,10 +140,21 @@ pub fn run_verification(
         .with_context(|| format!("{}: cannot write", p.display()))?;
     }
     if let Some(p) = &o.deviation {
-        cam_verify::ply::write_deviation_ply(p, &v.refined, &v.deviations, tolerance, cam_verify::ply::PlyFormat::BinaryLittleEndian)?;
+        cam_verify::ply::write_deviation_ply(
+            p,
+            &v.refined,
+            &v.deviations,
+            tolerance,
+            cam_verify::ply::PlyFormat::BinaryLittleEndian,
+        )?;
     }
     if let Some(p) = &o.heatmap {
-        cam_verify::heatmap::write_heatmap(p, &v.refined, &v.deviations, &cam_verify::heatmap::HeatmapConfig::new(tolerance))?;
+        cam_verify::heatmap::write_heatmap(
+            p,
+            &v.refined,
+            &v.deviations,
+            &cam_verify::heatmap::HeatmapConfig::new(tolerance),
+        )?;
     }
     Ok(v)
 }
@@ -173,7 +194,8 @@ pub fn verdict(v: &Verification, tol: f64) -> Result<()> {
                 w.position[0],
                 w.position[1],
                 w.position[2],
-                w.line.map_or(String::new(), |l| format!(", toolpath line {l}"))
+                w.line
+                    .map_or(String::new(), |l| format!(", toolpath line {l}"))
             ))
         ))
         .into());

@@ -4,3 +4,4 @@ mod cl;
 mod plan;
 mod plan_checks;
 mod support;
+mod verify;

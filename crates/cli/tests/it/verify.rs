@@ -1,0 +1,111 @@
+//! `cam verify`: gouges found and located, exit codes, outputs.
+
+use crate::support::{SQUARE_OBJ, cam, stderr, write};
+
+/// A ball:6 pass along y = 5 over the unit square at z = 1, tip at `z`.
+fn pass_at(z: f64) -> String {
+    format!("G21 G90 G17\nG0 Z5\nG0 X-2 Y5\nG1 Z{z} F100\nG1 X12 F500\nG0 Z5\nM30\n")
+}
+
+#[test]
+fn tangent_pass_is_clean_and_outputs_are_written() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "sq.obj", SQUARE_OBJ);
+    let ngc = write(d.path(), "p.ngc", &pass_at(1.0));
+    let (ply, png, stl) = (
+        d.path().join("dev.ply"),
+        d.path().join("map.png"),
+        d.path().join("swept.stl"),
+    );
+    let o = cam(&[
+        "verify",
+        ngc.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        "ball:6",
+        "--json",
+        "--deviation",
+        ply.to_str().unwrap(),
+        "--heatmap",
+        png.to_str().unwrap(),
+        "--swept",
+        stl.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // The ball rests on the plane: no gouge; the groove's bottom is exact to the imprint
+    // model's flat-bottom accuracy.
+    assert!(j["max_gouge_mm"].as_f64().unwrap() < 1e-6, "{j}");
+    assert!(j["measured"].as_u64().unwrap() > 100, "{j}");
+    for p in [&ply, &png, &stl] {
+        assert!(
+            std::fs::metadata(p).unwrap().len() > 100,
+            "{} not written",
+            p.display()
+        );
+    }
+}
+
+#[test]
+fn plunge_below_surface_is_a_located_gouge_exit_1() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "sq.obj", SQUARE_OBJ);
+    let ngc = write(d.path(), "p.ngc", &pass_at(0.9));
+    let o = cam(&[
+        "verify",
+        ngc.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        "ball:6",
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let g = j["max_gouge_mm"].as_f64().unwrap();
+    // The tip runs 0.1 below the plane along y = 5: the deepest point is under the tip.
+    assert!((g - 0.1).abs() < 1e-3, "max gouge {g}");
+    let w = &j["worst_gouges"][0];
+    assert!(
+        (w["position"][1].as_f64().unwrap() - 5.0).abs() < 0.2,
+        "{w}"
+    );
+    assert!(
+        w["line"] == 4 || w["line"] == 5,
+        "worst gouge names the cutting line: {w}"
+    );
+    assert!(
+        stderr(&o).contains("exceeds the tolerance"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_gcode_names_line_and_column_exit_2() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "sq.obj", SQUARE_OBJ);
+    let ngc = write(d.path(), "bad.ngc", "G21 G90\nG0 Z5\nG1 X1 Q7 F100\n");
+    let o = cam(&[
+        "verify",
+        ngc.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        "ball:6",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("bad.ngc:3:"), "{}", stderr(&o));
+    let apt = write(d.path(), "bad.apt", "GOTO/1,2,3,0,0,0\n");
+    let o = cam(&[
+        "verify",
+        apt.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        "ball:6",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("bad.apt:1"), "{}", stderr(&o));
+}
