@@ -1,0 +1,230 @@
+//! The planner on meshes through `plan_part` (sections + exact drop-cutter), checked densely
+//! against the drop-cutter and by the swept-cutter scallop measurement against the mesh.
+
+use std::path::PathBuf;
+
+use cam_core::{Cutter, Mesh, MoveKind, Units};
+use cam_offset::DropCutter;
+use cam_plan::{ClSurface, Plan, PlanConfig, ScallopProbe, measure_scallop, plan_part};
+
+fn workspace() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Top z of a mesh over XY by brute force (vertical line against every triangle, bucketed).
+pub struct TopZ {
+    tris: Vec<[cam_core::DVec3; 3]>,
+    cell: f64,
+    x0: f64,
+    y0: f64,
+    nx: usize,
+    ny: usize,
+    buckets: Vec<Vec<u32>>,
+}
+
+impl TopZ {
+    pub fn new(mesh: &Mesh) -> TopZ {
+        let b = mesh.bounds();
+        let cell = 2.0;
+        let nx = ((b.max.x - b.min.x) / cell).ceil() as usize + 1;
+        let ny = ((b.max.y - b.min.y) / cell).ceil() as usize + 1;
+        let mut buckets = vec![Vec::new(); nx * ny];
+        let tris: Vec<_> = mesh.triangles().iter().map(|t| t.v).collect();
+        for (k, t) in tris.iter().enumerate() {
+            let (mut lo, mut hi) = (t[0], t[0]);
+            for p in t {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+            let (i0, i1) = (
+                ((lo.x - b.min.x) / cell) as usize,
+                ((hi.x - b.min.x) / cell) as usize,
+            );
+            let (j0, j1) = (
+                ((lo.y - b.min.y) / cell) as usize,
+                ((hi.y - b.min.y) / cell) as usize,
+            );
+            for i in i0..=i1.min(nx - 1) {
+                for j in j0..=j1.min(ny - 1) {
+                    buckets[j * nx + i].push(k as u32);
+                }
+            }
+        }
+        TopZ {
+            tris,
+            cell,
+            x0: b.min.x,
+            y0: b.min.y,
+            nx,
+            ny,
+            buckets,
+        }
+    }
+    pub fn z(&self, x: f64, y: f64) -> Option<f64> {
+        let i = ((x - self.x0) / self.cell).floor();
+        let j = ((y - self.y0) / self.cell).floor();
+        if i < 0.0 || j < 0.0 || i as usize >= self.nx || j as usize >= self.ny {
+            return None;
+        }
+        let mut best: Option<f64> = None;
+        for &k in &self.buckets[j as usize * self.nx + i as usize] {
+            let [a, b, c] = self.tris[k as usize];
+            let d = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+            if d.abs() < 1e-14 {
+                continue;
+            }
+            let l1 = ((x - a.x) * (c.y - a.y) - (c.x - a.x) * (y - a.y)) / d;
+            let l2 = ((b.x - a.x) * (y - a.y) - (x - a.x) * (b.y - a.y)) / d;
+            let e = -1e-12;
+            if l1 >= e && l2 >= e && l1 + l2 <= 1.0 - e {
+                let z = a.z + l1 * (b.z - a.z) + l2 * (c.z - a.z);
+                best = Some(best.map_or(z, |q: f64| q.max(z)));
+            }
+        }
+        best
+    }
+}
+
+/// Dense check of every pass move against the drop-cutter at 0.01 mm spacing:
+/// (largest gouge, largest excess, samples).
+fn dense_vs_drop(dc: &DropCutter, p: &Plan) -> (f64, f64, usize) {
+    let (mut g, mut e, mut n) = (0.0f64, 0.0f64, 0);
+    for w in p.toolpath.moves.windows(2) {
+        if w[1].kind != MoveKind::Cut || w[1].pass.is_none() {
+            continue;
+        }
+        let (a, b) = (w[0].pose.tip, w[1].pose.tip);
+        let k = (a.distance(b) / 0.01).ceil().max(1.0) as usize;
+        for j in 0..=k {
+            let q = a.lerp(b, j as f64 / k as f64);
+            let z = dc
+                .z_tip(q.x, q.y)
+                .expect("pass moves stay where the cutter touches");
+            g = g.max(z - q.z);
+            e = e.max(q.z - z);
+            n += 1;
+        }
+    }
+    (g, e, n)
+}
+
+#[test]
+fn dome_obj_ball_tolerance_and_scallop() {
+    let mesh = Mesh::load(workspace().join("fixtures/parts/dome.obj"), Units::Mm).unwrap();
+    let ball = Cutter::ball(6.0).unwrap();
+    let cfg = PlanConfig {
+        cutter: ball,
+        tolerance_mm: 0.01,
+        scallop_mm: 0.02,
+        boundary: Some((-24.0, 24.0, -4.0, 4.0)),
+        ..PlanConfig::default()
+    };
+    let p = plan_part(&mesh, &cfg, None).unwrap();
+    let dc = DropCutter::new(&mesh, ball);
+    let (g, e, n) = dense_vs_drop(&dc, &p);
+    eprintln!(
+        "dome.obj ball:6 τ 0.01 h 0.02: passes {} cl {} gouge {g:.5} excess {e:.5} over {n} samples; planner max dev {:.5}, unresolved {}, predicted scallop {:.5}",
+        p.passes,
+        p.cl_points,
+        p.max_chord_deviation_mm,
+        p.unresolved_joins,
+        p.predicted_max_scallop_mm
+    );
+    assert!(g <= 0.01 && e <= 0.01, "gouge {g} excess {e}");
+    // Scallop on the cap (reachable by the ball: within 19.8 mm of the axis).
+    let top = TopZ::new(&mesh);
+    let part = |x: f64, y: f64| top.z(x, y);
+    let probe = ScallopProbe {
+        angle_deg: 0.0,
+        stations_u: vec![-10.0, 0.0, 10.0],
+        v_range: (-3.0, 3.0),
+        dv_mm: 2e-3,
+    };
+    let r = measure_scallop(&part, &ball, &p.toolpath, &probe);
+    eprintln!(
+        "dome.obj measured scallop {:.5} at {:?}, gouge {:.2e}",
+        r.max_scallop_mm, r.at_xy, r.max_gouge_mm
+    );
+    assert!(
+        r.max_gouge_mm <= 0.01 + 1e-9,
+        "gouge below the mesh {}",
+        r.max_gouge_mm
+    );
+    assert!(
+        r.max_scallop_mm <= 0.02 * 1.05,
+        "scallop {}",
+        r.max_scallop_mm
+    );
+}
+
+#[test]
+fn sphere_on_plate_stl_bull_and_flat_tolerance() {
+    let mesh = Mesh::load("/work/shared/fixtures/ocl_sphere_on_plate.stl", Units::Mm).unwrap();
+    for spec in ["ball:6", "bull:6:1.5", "flat:6"] {
+        let cutter: Cutter = spec.parse().unwrap();
+        let cfg = PlanConfig {
+            cutter,
+            tolerance_mm: 0.01,
+            scallop_mm: 0.05,
+            angle_deg: 15.0,
+            boundary: Some((26.0, 50.0, 37.0, 39.0)),
+            ..PlanConfig::default()
+        };
+        let p = plan_part(&mesh, &cfg, None).unwrap();
+        let dc = DropCutter::new(&mesh, cutter);
+        let (g, e, n) = dense_vs_drop(&dc, &p);
+        eprintln!(
+            "sphere_on_plate {spec}: passes {} cl {} gouge {g:.5} excess {e:.5} ({n} samples), unresolved {} (dev {:.4}), steep {}",
+            p.passes,
+            p.cl_points,
+            p.unresolved_joins,
+            p.unresolved_deviation_mm,
+            p.steep_limited_points
+        );
+        if p.unresolved_joins == 0 {
+            assert!(g <= 0.01 && e <= 0.01, "{spec}: gouge {g} excess {e}");
+        }
+    }
+}
+
+#[test]
+fn tilted_plane_obj_side_step_is_cos_theta_and_scallop_is_h() {
+    let mesh = Mesh::load(
+        workspace().join("fixtures/parts/tilted_plane.obj"),
+        Units::Mm,
+    )
+    .unwrap();
+    let ball = Cutter::ball(6.0).unwrap();
+    // Passes along y (angle 90°), side steps across the 20° slope.
+    let cfg = PlanConfig {
+        cutter: ball,
+        tolerance_mm: 0.01,
+        scallop_mm: 0.01,
+        angle_deg: 90.0,
+        boundary: Some((-10.0, 10.0, -10.0, 10.0)),
+        ..PlanConfig::default()
+    };
+    let p = plan_part(&mesh, &cfg, None).unwrap();
+    let th = 20f64.to_radians();
+    let want = 2.0 * (2.0 * 3.0 * 0.01 - 1e-4f64).sqrt() * th.cos();
+    for w in p.pass_v_mm.windows(2).take(p.passes - 2) {
+        cam_core::assert_near!(w[1] - w[0], want, 1e-6);
+    }
+    let dc = DropCutter::new(&mesh, ball);
+    let (g, e, _) = dense_vs_drop(&dc, &p);
+    assert!(g <= 0.01 && e <= 0.01, "gouge {g} excess {e}");
+    let part = |x: f64, y: f64| Some(x * th.tan()).filter(|_| x.abs() <= 30.0 && y.abs() <= 30.0);
+    let probe = ScallopProbe {
+        angle_deg: 90.0,
+        stations_u: vec![-5.0, 0.0, 5.0],
+        v_range: (-6.0, 6.0),
+        dv_mm: 1e-3,
+    };
+    let r = measure_scallop(&part, &ball, &p.toolpath, &probe);
+    eprintln!(
+        "tilted_plane.obj: {} passes, interval {want:.6}, measured scallop {:.7}",
+        p.passes, r.max_scallop_mm
+    );
+    assert!(r.max_gouge_mm < 1e-9, "gouge {}", r.max_gouge_mm);
+    cam_core::assert_near!(r.max_scallop_mm, 0.01, 1e-6);
+}
