@@ -154,23 +154,26 @@ fn choose_tool(
         return Ok((t.clone(), None));
     }
     let curv = cam_holder::concave_curvature(mesh, &cam_holder::CurvatureConfig::default());
+    // Judge each candidate on what the machine would run: its plan, posted and read back.
     let plan_for = |t: &ToolAssembly| -> Option<cam_core::Toolpath> {
         let cfg = PlanConfig {
             cutter: t.cutter,
             ..*base
         };
-        cam_plan::plan_part(mesh, &cfg, None)
-            .ok()
-            .map(|p| p.toolpath)
+        let p = cam_plan::plan_part(mesh, &cfg, None).ok()?;
+        let job = PostJob {
+            safe_z_mm: p.safe_z_mm,
+            ..PostJob::default()
+        };
+        let text = cam_gcode::post_to_string(&p.toolpath, &job, a.post).ok()?;
+        reread(&text, a).ok()
     };
-    let sel = cam_holder::select_tool(
-        &lib,
-        mesh,
-        &curv,
-        Some(&plan_for),
-        &cam_holder::SelectConfig::default(),
-    )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", a.part.display()))?;
+    let scfg = cam_holder::SelectConfig {
+        check: holder_check(),
+        ..cam_holder::SelectConfig::default()
+    };
+    let sel = cam_holder::select_tool(&lib, mesh, &curv, Some(&plan_for), &scfg)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", a.part.display()))?;
     let why = format!(
         "tool {} chosen from {} (smallest concave radius {}; {} larger tools passed over)",
         sel.tool_id,
@@ -264,7 +267,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     // Check what the machine will run: the program read back, with its line numbers.
     let t1 = Instant::now();
     let mut readback = reread(&program, &a)?;
-    let check = CheckConfig::default();
+    let check = holder_check();
     let mut report = cam_holder::check_toolpath(&mesh, &assembly, &readback, &check);
     let stick = cam_holder::min_stick_out(&mesh, &assembly, &readback, &check);
     let mut avoided = None;
@@ -404,6 +407,18 @@ pub fn run(a: PlanArgs) -> Result<()> {
     match &verification {
         Some(v) => crate::verify::verdict(v, a.tolerance),
         None => Ok(()),
+    }
+}
+
+/// Holder contacts shallower than this (mm) are rubbing, not collisions: where the cutter's
+/// side is tangent to a face, a shank as wide as the cutter is tangent too, and pass ends
+/// are located to 1e-5 mm, so "depths" of micrometres and below are noise.
+const HOLDER_CONTACT_MM: f64 = 1e-3;
+
+fn holder_check() -> CheckConfig {
+    CheckConfig {
+        min_depth_mm: HOLDER_CONTACT_MM,
+        ..CheckConfig::default()
     }
 }
 

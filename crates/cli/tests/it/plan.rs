@@ -163,3 +163,74 @@ fn plan_bad_values_exit_2() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("lib.json"), "{}", stderr(&o));
 }
+
+fn fillet() -> String {
+    root()
+        .join("fixtures/parts/fillet.obj")
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+fn ball_lib(diameters: &[f64]) -> String {
+    let tools: Vec<String> = diameters
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            format!(
+                r#"{{ "id": "B{d}", "number": {n}, "cutter": {{ "type": "ball", "diameter": {d} }},
+                 "flute_length": {f}, "shank_diameter": {d}, "stick_out": {s},
+                 "holder": [ {{ "diameter": {h}, "length": 30 }} ] }}"#,
+                n = i + 1,
+                f = 2.0 * d,
+                s = 4.0 * d + 10.0,
+                h = 3.0 * d
+            )
+        })
+        .collect();
+    format!(r#"{{ "units": "mm", "tools": [ {} ] }}"#, tools.join(","))
+}
+
+#[test]
+fn library_without_tool_picks_the_largest_that_fits_the_fillet() {
+    // fillet.obj: a concave fillet of radius 6. A ball of radius 5 fits, 8 does not.
+    let d = tempfile::tempdir().unwrap();
+    let lib = write(d.path(), "lib.json", &ball_lib(&[4.0, 10.0, 16.0]));
+    let out = d.path().join("f.ngc");
+    let o = cam(&[
+        "plan",
+        &fillet(),
+        "--tool-library",
+        lib.to_str().unwrap(),
+        "--scallop",
+        "0.2",
+        "--no-verify",
+        "-o",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["tool"], "ball:10", "{j}");
+    assert!(std::fs::read_to_string(&out).unwrap().contains("T2 M6"));
+}
+
+#[test]
+fn no_tool_fits_exit_2_names_region_radius_and_closest_tool() {
+    let d = tempfile::tempdir().unwrap();
+    let lib = write(d.path(), "lib.json", &ball_lib(&[16.0, 20.0]));
+    let out = d.path().join("f.ngc");
+    let o = cam(&[
+        "plan",
+        &fillet(),
+        "--tool-library",
+        lib.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("B16"), "closest tool named: {e}");
+    assert!(e.contains('6'), "radius named: {e}");
+    assert!(!out.exists());
+}
