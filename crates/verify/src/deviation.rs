@@ -258,6 +258,101 @@ impl TriangleBvh {
     }
 }
 
+impl TriangleBvh {
+    /// The accepted crossing of the segment `origin + t·dir`, `t ∈ [t0, t1]`, with the
+    /// smallest `t` (ties: the smaller triangle index). Visits near boxes first and prunes
+    /// boxes entered beyond the best crossing so far, so a segment through many stacked
+    /// sheets costs about one path down the tree; the answer is the same as scanning every
+    /// hit with [`TriangleBvh::segment_hits`] (box tests include their boundary).
+    pub fn lowest_hit(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t0: f64,
+        t1: f64,
+        accept: impl Fn(&Hit) -> bool,
+    ) -> Option<Hit> {
+        if self.tris.is_empty() {
+            return None;
+        }
+        let inv = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
+        let mut best: Option<Hit> = None;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = self.nodes[stack[top] as usize];
+            let hi = best.map_or(t1, |b| b.t);
+            if slab_entry(origin, inv, n.min, n.max, t0, hi).is_none() {
+                continue;
+            }
+            if n.count > 0 {
+                for &ti in &self.order[n.first as usize..(n.first + n.count) as usize] {
+                    let hi = best.map_or(t1, |b| b.t);
+                    if let Some(h) = intersect(&self.tris[ti as usize], origin, dir, t0, hi) {
+                        let h = Hit { triangle: ti, ..h };
+                        let better =
+                            best.is_none_or(|b| h.t < b.t || (h.t == b.t && ti < b.triangle));
+                        if better && accept(&h) {
+                            best = Some(h);
+                        }
+                    }
+                }
+            } else {
+                let (l, r) = (n.first, n.first + 1);
+                let el = slab_entry(
+                    origin,
+                    inv,
+                    self.nodes[l as usize].min,
+                    self.nodes[l as usize].max,
+                    t0,
+                    hi,
+                );
+                let er = slab_entry(
+                    origin,
+                    inv,
+                    self.nodes[r as usize].min,
+                    self.nodes[r as usize].max,
+                    t0,
+                    hi,
+                );
+                // Push the farther child first so the nearer one is visited first.
+                let (first, second) = match (el, er) {
+                    (Some(a), Some(b)) if b < a => (l, r),
+                    _ => (r, l),
+                };
+                stack[top] = first;
+                stack[top + 1] = second;
+                top += 2;
+            }
+        }
+        best
+    }
+}
+
+/// Entry parameter of the segment into the box, or `None` if it misses (boundary included).
+fn slab_entry(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> Option<f64> {
+    let (mut lo, mut hi) = (t0, t1);
+    for a in 0..3 {
+        if inv[a].is_infinite() {
+            if o[a] < min[a] || o[a] > max[a] {
+                return None;
+            }
+            continue;
+        }
+        let ta = (min[a] - o[a]) * inv[a];
+        let tb = (max[a] - o[a]) * inv[a];
+        let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+        let pad = 1e-12 * (1.0 + ta.abs().max(tb.abs()));
+        lo = lo.max(ta - pad);
+        hi = hi.min(tb + pad);
+        if lo > hi {
+            return None;
+        }
+    }
+    Some(lo)
+}
+
 fn slab(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
     let (mut lo, mut hi) = (t0, t1);
     for a in 0..3 {
@@ -328,20 +423,12 @@ fn vector_deviation(
     cfg: &DeviationConfig,
 ) -> (Option<f64>, Option<u32>) {
     // Lowest entry; ties broken by the smaller triangle index for determinism.
-    let mut best: Option<(f64, u32)> = None;
-    bvh.segment_hits(p, n, -cfg.inside_mm, cfg.outside_mm, |h| {
-        let entry = match cfg.facing {
+    let best = bvh
+        .lowest_hit(p, n, -cfg.inside_mm, cfg.outside_mm, |h| match cfg.facing {
             Facing::AgainstVector => h.facing < 0.0,
             Facing::Any => true,
-        };
-        let better = match best {
-            None => true,
-            Some((bt, bi)) => h.t < bt || (h.t == bt && h.triangle < bi),
-        };
-        if entry && better {
-            best = Some((h.t, h.triangle));
-        }
-    });
+        })
+        .map(|h| (h.t, h.triangle));
     match best {
         Some((t, i)) => (Some(t), Some(moves[i as usize])),
         None => (None, None),
