@@ -139,82 +139,62 @@ pub struct Hit {
 const LEAF: usize = 4;
 
 impl TriangleBvh {
-    /// Builds the hierarchy over `tris` (copied).
+    /// Builds the hierarchy over `tris` (copied, in tree order for locality).
+    ///
+    /// Triangles are sorted by the Morton code of their centroid (ties by index, so the
+    /// build is deterministic) and split at the median of that order; box bounds are
+    /// computed bottom-up. One parallel sort plus one linear pass.
     pub fn new(tris: &[Triangle]) -> TriangleBvh {
-        let mut order: Vec<u32> = (0..tris.len() as u32).collect();
         let cent: Vec<DVec3> = tris
-            .iter()
+            .par_iter()
             .map(|t| (t.v[0] + t.v[1] + t.v[2]) / 3.0)
             .collect();
-        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 1);
+        let (lo, hi) = cent.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(a, b), &c| (a.min(c), b.max(c)),
+        );
+        let scale = (hi - lo).max(DVec3::splat(1e-300));
+        let mut keyed: Vec<(u64, u32)> = cent
+            .par_iter()
+            .enumerate()
+            .map(|(i, &c)| {
+                let q =
+                    ((c - lo) / scale * 2_097_151.0).clamp(DVec3::ZERO, DVec3::splat(2_097_151.0));
+                let code =
+                    spread(q.x as u64) | (spread(q.y as u64) << 1) | (spread(q.z as u64) << 2);
+                (code, i as u32)
+            })
+            .collect();
+        drop(cent);
+        keyed.par_sort_unstable();
+        let order: Vec<u32> = keyed.iter().map(|&(_, i)| i).collect();
+        drop(keyed);
+        let sorted: Vec<Triangle> = order.par_iter().map(|&i| tris[i as usize]).collect();
+        let mut nodes = Vec::with_capacity(2 * tris.len() / LEAF + 2);
         nodes.push(Node {
             min: DVec3::ZERO,
             max: DVec3::ZERO,
             first: 0,
             count: 0,
         });
-        let mut stack = vec![(0usize, 0usize, tris.len())];
-        while let Some((ni, lo, hi)) = stack.pop() {
-            let mut bmin = DVec3::splat(f64::INFINITY);
-            let mut bmax = DVec3::splat(f64::NEG_INFINITY);
-            let mut cmin = bmin;
-            let mut cmax = bmax;
-            for &i in &order[lo..hi] {
-                for p in tris[i as usize].v {
-                    bmin = bmin.min(p);
-                    bmax = bmax.max(p);
-                }
-                cmin = cmin.min(cent[i as usize]);
-                cmax = cmax.max(cent[i as usize]);
-            }
-            nodes[ni].min = bmin;
-            nodes[ni].max = bmax;
-            let ext = cmax - cmin;
-            if hi - lo <= LEAF || ext.max_element() <= 0.0 {
-                nodes[ni].first = lo as u32;
-                nodes[ni].count = (hi - lo) as u32;
-                continue;
-            }
-            let axis = if ext.x >= ext.y && ext.x >= ext.z {
-                0
-            } else if ext.y >= ext.z {
-                1
-            } else {
-                2
-            };
-            let mid = (lo + hi) / 2;
-            order[lo..hi].select_nth_unstable_by(mid - lo, |&a, &b| {
-                cent[a as usize][axis]
-                    .total_cmp(&cent[b as usize][axis])
-                    .then(a.cmp(&b))
-            });
-            let left = nodes.len();
-            nodes.push(Node {
-                min: DVec3::ZERO,
-                max: DVec3::ZERO,
-                first: 0,
-                count: 0,
-            });
-            nodes.push(Node {
-                min: DVec3::ZERO,
-                max: DVec3::ZERO,
-                first: 0,
-                count: 0,
-            });
-            nodes[ni].first = left as u32;
-            stack.push((left + 1, mid, hi));
-            stack.push((left, lo, mid));
+        if !sorted.is_empty() {
+            build(&sorted, &mut nodes, 0, 0, sorted.len());
         }
         TriangleBvh {
             nodes,
             order,
-            tris: tris.to_vec(),
+            tris: sorted,
         }
     }
 
-    /// The triangles the hierarchy was built from.
-    pub fn triangles(&self) -> &[Triangle] {
-        &self.tris
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// True when built from no triangles.
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
     }
 
     /// Calls `f` for every triangle crossed by the segment `origin + t·dir`, `t ∈ [t0, t1]`
@@ -244,9 +224,12 @@ impl TriangleBvh {
                 continue;
             }
             if n.count > 0 {
-                for &ti in &self.order[n.first as usize..(n.first + n.count) as usize] {
-                    if let Some(h) = intersect(&self.tris[ti as usize], origin, dir, t0, t1) {
-                        f(Hit { triangle: ti, ..h });
+                for k in n.first as usize..(n.first + n.count) as usize {
+                    if let Some(h) = intersect(&self.tris[k], origin, dir, t0, t1) {
+                        f(Hit {
+                            triangle: self.order[k],
+                            ..h
+                        });
                     }
                 }
             } else {
@@ -287,9 +270,10 @@ impl TriangleBvh {
                 continue;
             }
             if n.count > 0 {
-                for &ti in &self.order[n.first as usize..(n.first + n.count) as usize] {
+                for k in n.first as usize..(n.first + n.count) as usize {
+                    let ti = self.order[k];
                     let hi = best.map_or(t1, |b| b.t);
-                    if let Some(h) = intersect(&self.tris[ti as usize], origin, dir, t0, hi) {
+                    if let Some(h) = intersect(&self.tris[k], origin, dir, t0, hi) {
                         let h = Hit { triangle: ti, ..h };
                         let better =
                             best.is_none_or(|b| h.t < b.t || (h.t == b.t && ti < b.triangle));
@@ -351,6 +335,55 @@ fn slab_entry(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) ->
         }
     }
     Some(lo)
+}
+
+/// Spreads the low 21 bits of `v` to every third bit (Morton interleaving).
+fn spread(v: u64) -> u64 {
+    let mut x = v & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x1f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x1f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    (x | (x << 2)) & 0x1249_2492_4924_9249
+}
+
+/// Fills node `ni` over `tris[lo..hi]` (median split in Morton order), bounds bottom-up.
+fn build(tris: &[Triangle], nodes: &mut Vec<Node>, ni: usize, lo: usize, hi: usize) {
+    if hi - lo <= LEAF {
+        let (mut bmin, mut bmax) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for t in &tris[lo..hi] {
+            for p in t.v {
+                bmin = bmin.min(p);
+                bmax = bmax.max(p);
+            }
+        }
+        nodes[ni] = Node {
+            min: bmin,
+            max: bmax,
+            first: lo as u32,
+            count: (hi - lo) as u32,
+        };
+        return;
+    }
+    let left = nodes.len();
+    let empty = Node {
+        min: DVec3::ZERO,
+        max: DVec3::ZERO,
+        first: 0,
+        count: 0,
+    };
+    nodes.push(empty);
+    nodes.push(empty);
+    let mid = (lo + hi) / 2;
+    build(tris, nodes, left, lo, mid);
+    build(tris, nodes, left + 1, mid, hi);
+    let (a, b) = (nodes[left], nodes[left + 1]);
+    nodes[ni] = Node {
+        min: a.min.min(b.min),
+        max: a.max.max(b.max),
+        first: left as u32,
+        count: 0,
+    };
 }
 
 fn slab(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
@@ -476,9 +509,9 @@ pub fn measure_with_bvh(
     source_move: &[u32],
     cfg: &DeviationConfig,
 ) -> Result<Vec<Deviation>, DeviationError> {
-    if source_move.len() != bvh.triangles().len() {
+    if source_move.len() != bvh.len() {
         return Err(DeviationError::LengthMismatch {
-            triangles: bvh.triangles().len(),
+            triangles: bvh.len(),
             moves: source_move.len(),
         });
     }
