@@ -144,6 +144,23 @@ pub fn run_rs274_with(
     let mut canon = ngc.as_os_str().to_owned();
     canon.push(".canon.txt");
     let canon = PathBuf::from(canon);
+    // Concurrent rs274 processes crash (SIGBUS) even in separate directories: the
+    // standalone interpreter shares state machine-wide. Serialise runs across threads and
+    // processes with an exclusive lock on a file in the temporary directory.
+    let lock_path = std::env::temp_dir().join("cam-rs274.lock");
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&lock_path)
+        .map_err(|source| Rs274Error::Io {
+            path: lock_path.clone(),
+            source,
+        })?;
+    lock.lock().map_err(|source| Rs274Error::Io {
+        path: lock_path.clone(),
+        source,
+    })?;
     let out = Command::new(&cfg.program)
         .arg("-g")
         .arg("-t")
