@@ -269,6 +269,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let mut readback = reread(&program, &a)?;
     let check = holder_check();
     let mut report = cam_holder::check_toolpath(&mesh, &assembly, &readback, &check);
+    let first_report = report.clone();
     let stick = cam_holder::min_stick_out(&mesh, &assembly, &readback, &check);
     let mut avoided = None;
     if !report.is_clear() {
@@ -338,6 +339,10 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let holder_json = serde_json::json!({
         "tool": assembly.id, "stick_out_mm": assembly.stick_out_mm,
         "collisions": report.collisions.len(), "max_depth_mm": report.max_depth_mm,
+        "findings": first_report.collisions.iter().take(1000).map(|c| serde_json::json!({
+            "line": c.line, "pass": c.pass, "position_mm": [c.position.x, c.position.y, c.position.z],
+            "part": c.part.to_string(), "depth_mm": c.depth_mm,
+        })).collect::<Vec<_>>(),
         "min_stick_out_mm": stick.min_mm, "policy": format!("{:?}", a.holder).to_lowercase(),
         "removed_cut_length_mm": avoided.as_ref().map(|s| s.removed_cut_length_mm),
         "unmachined_area_mm2": avoided.as_ref().map(|s| s.unmachined_area_mm2),

@@ -78,7 +78,17 @@ fn holder_report_and_avoid_policies_write_gcode() {
             "library tool number used"
         );
         match policy {
-            "report" => assert!(j["holder"]["collisions"].as_u64().unwrap() > 0, "{j}"),
+            "report" => {
+                assert!(j["holder"]["collisions"].as_u64().unwrap() > 0, "{j}");
+                let f = &j["holder"]["findings"][0];
+                assert!(
+                    f["line"].as_u64().unwrap() > 0 && f["depth_mm"].as_f64().unwrap() > 0.0,
+                    "{f}"
+                );
+                // The Ø20 holder, its axis 3 mm from the wall (ball radius), reaches 10 - 3 = 7 mm in.
+                assert_eq!(f["part"], "holder cylinder 0", "{f}");
+                assert!((f["depth_mm"].as_f64().unwrap() - 7.0).abs() < 1e-6, "{f}");
+            }
             _ => {
                 assert_eq!(j["holder"]["collisions"], 0, "{j}");
                 assert!(
