@@ -5,6 +5,8 @@
 //! cargo xtask ocl-ref                      regenerate fixtures/ocl/ (OpenCAMLib CL grids)
 //! cargo xtask bench dropcutter [--quick]   ours vs OpenCAMLib BatchDropCutter, points/s
 //! cargo xtask bench mem                    load time and peak RSS for a 1M-triangle part
+//! cargo xtask bench plan [--quick] [--cutter SPEC]...    plan vs drop-cutter time, holder share
+//! cargo xtask bench verify [--quick] [--cutter SPEC]...  imprint points/s, verify vs plan time
 //! cargo xtask gen-fixtures                 write fixtures/parts/*.obj
 //! ```
 //!
@@ -16,7 +18,9 @@ mod bench;
 mod mem;
 mod ocl;
 mod parts;
+mod planbench;
 mod refs;
+mod verifybench;
 
 use std::path::PathBuf;
 
@@ -28,6 +32,10 @@ commands:
   ocl-ref                     regenerate fixtures/ocl/ with OpenCAMLib (needs the shared tools)
   bench dropcutter [--quick]  drop-cutter points/s, ours vs OpenCAMLib (--quick: 1 run, not best of 3)
   bench mem                   load time and peak RSS for a generated 1M-triangle STL
+  bench plan [--quick] [--cutter SPEC]...    plan_part time vs drop-cutter time for its CL
+                                             points, holder check (--quick: 1 run)
+  bench verify [--quick] [--cutter SPEC]...  imprint points/s; verify time vs plan time
+                                             (--quick: 1 run, ball:6 unless --cutter)
   gen-fixtures                write the analytic test parts into fixtures/parts/
 ";
 
@@ -56,6 +64,29 @@ fn run(args: Vec<String>) -> Result<()> {
             })
         }
         ["bench", "mem"] => mem::mem(),
+        ["bench", "plan", rest @ ..] => {
+            let (quick, cutters) = bench_flags("plan", rest)?;
+            let mut cfg = planbench::PlanBenchConfig::new(if quick { 1 } else { 3 });
+            if !cutters.is_empty() {
+                cfg.cutters = cutters;
+            }
+            planbench::plan(&cfg)
+        }
+        ["bench", "verify", rest @ ..] => {
+            let (quick, cutters) = bench_flags("verify", rest)?;
+            let mut plan = planbench::PlanBenchConfig::new(if quick { 1 } else { 3 });
+            if quick {
+                plan.cutters = vec!["ball:6".into()];
+            }
+            if !cutters.is_empty() {
+                plan.cutters = cutters;
+            }
+            verifybench::verify_bench(&verifybench::VerifyBenchConfig {
+                plan,
+                imprint_poses: 100_000,
+                imprint_min_s: if quick { 0.2 } else { 1.0 },
+            })
+        }
         [mem::CHILD, path] => mem::child(path),
         ["gen-fixtures"] => parts::gen_fixtures(&repo_root().join("fixtures/parts")),
         ["help" | "--help" | "-h"] | [] => {
@@ -64,6 +95,35 @@ fn run(args: Vec<String>) -> Result<()> {
         }
         _ => bail!("unknown command '{}'\n{USAGE}", args.join(" ")),
     }
+}
+
+/// The options of `bench plan` / `bench verify`: `--quick` and any `--cutter SPEC`.
+fn bench_flags(bench: &str, rest: &[&str]) -> Result<(bool, Vec<String>)> {
+    let mut quick = false;
+    let mut cutters = Vec::new();
+    let mut it = rest.iter();
+    while let Some(r) = it.next() {
+        match *r {
+            "--quick" => quick = true,
+            "--cutter" => match it.next() {
+                Some(spec) => cutters.push(spec.to_string()),
+                None => bail!("--cutter needs a spec (e.g. ball:6)\n{USAGE}"),
+            },
+            other => bail!("unknown option '{other}' for bench {bench}\n{USAGE}"),
+        }
+    }
+    Ok((quick, cutters))
+}
+
+/// The machine's load averages (1, 5, 15 min) as `uptime` prints them, for the tables.
+pub(crate) fn load_average() -> String {
+    std::fs::read_to_string("/proc/loadavg").map_or_else(
+        |_| "load average: n/a".to_string(),
+        |s| {
+            let v: Vec<&str> = s.split_whitespace().take(3).collect();
+            format!("load average: {}", v.join(", "))
+        },
+    )
 }
 
 /// The workspace root (the parent of this crate's directory).
@@ -79,4 +139,24 @@ pub(crate) fn shared_dir() -> PathBuf {
     std::env::var_os("CAM_SHARED")
         .map(PathBuf::from)
         .unwrap_or_else(|| repo_root().join("../shared"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bench_flags_parse_quick_and_cutters() {
+        assert_eq!(bench_flags("plan", &[]).unwrap(), (false, vec![]));
+        assert_eq!(
+            bench_flags(
+                "verify",
+                &["--cutter", "flat:6", "--quick", "--cutter", "ball:3"]
+            )
+            .unwrap(),
+            (true, vec!["flat:6".to_string(), "ball:3".to_string()])
+        );
+        assert!(bench_flags("plan", &["--cutter"]).is_err());
+        assert!(bench_flags("plan", &["--fast"]).is_err());
+    }
 }

@@ -1,0 +1,362 @@
+//! `cargo xtask bench verify`: imprint points per second, and `cam_verify::verify` time next
+//! to `cam_plan::plan_part` time for the same path.
+
+use std::time::Instant;
+
+use anyhow::{Context, Result};
+use cam_core::{Cutter, DVec3, MoveKind, Pose, Toolpath};
+use cam_verify::imprint::{Half, ImprintConfig, Imprinter, Placement, transport_frames};
+use cam_verify::testpaths::{PassSpec, TestSurface, pass};
+use cam_verify::{VerifyConfig, verify};
+
+use crate::planbench::{self, PlanBenchConfig, best_of};
+
+/// Settings of `bench verify`.
+#[derive(Debug, Clone)]
+pub struct VerifyBenchConfig {
+    /// Parts, cutters, τ, h and runs of the plans (the verify tolerance is τ).
+    pub plan: PlanBenchConfig,
+    /// Poses of the 5-axis imprint path.
+    pub imprint_poses: usize,
+    /// Minimum seconds spent per imprint measurement (repeats until reached).
+    pub imprint_min_s: f64,
+}
+
+/// One imprint measurement.
+#[derive(Debug, Clone, Copy)]
+pub struct ImprintTiming {
+    /// Poses (curves).
+    pub poses: usize,
+    /// Points written (`poses × (Q/2 + 1)`).
+    pub points: usize,
+    /// Best seconds for `transport_frames` (serial).
+    pub frames_s: f64,
+    /// Best seconds for `Imprinter::curves` on a 1-thread pool.
+    pub curves_1t_s: f64,
+    /// Best seconds for `Imprinter::curves` on a 2-thread pool.
+    pub curves_2t_s: f64,
+}
+
+fn pool(n: usize) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .context("building a rayon pool")
+}
+
+/// Best seconds of `f` over at least `runs` calls and at least `min_s` seconds in total.
+fn best_repeated(runs: usize, min_s: f64, mut f: impl FnMut()) -> f64 {
+    let start = Instant::now();
+    let mut best = f64::INFINITY;
+    let mut n = 0;
+    while n < runs.max(1) || start.elapsed().as_secs_f64() < min_s {
+        let t = Instant::now();
+        f();
+        best = best.min(t.elapsed().as_secs_f64());
+        n += 1;
+    }
+    best
+}
+
+/// Times frames and curves for `poses` (Q = 40, `placement`), cutting half.
+pub fn time_imprint(
+    poses: &[Pose],
+    cutter: &Cutter,
+    placement: Placement,
+    runs: usize,
+    min_s: f64,
+) -> Result<ImprintTiming> {
+    let imp = Imprinter::new(
+        cutter,
+        &ImprintConfig {
+            inserts: 40,
+            placement,
+            ..ImprintConfig::default()
+        },
+    );
+    let r = cutter.corner_radius();
+    let frames_s = best_repeated(runs, min_s, || {
+        std::hint::black_box(transport_frames(poses, r));
+    });
+    let frames = transport_frames(poses, r);
+    let mut out = vec![DVec3::ZERO; frames.len() * imp.points_per_curve()];
+    let mut curves_on = |threads: usize| -> Result<f64> {
+        let p = pool(threads)?;
+        Ok(best_repeated(runs, min_s, || {
+            std::hint::black_box(p.install(|| imp.curves(&frames, Half::Cutting, &mut out)));
+        }))
+    };
+    let curves_1t_s = curves_on(1)?;
+    let curves_2t_s = curves_on(2)?;
+    if out.iter().any(|p| !p.is_finite()) {
+        anyhow::bail!("imprint points not finite");
+    }
+    Ok(ImprintTiming {
+        poses: frames.len(),
+        points: out.len(),
+        frames_s,
+        curves_1t_s,
+        curves_2t_s,
+    })
+}
+
+/// The 5-axis pass of the imprint criterion bench (bull:38:3 over a cylinder of radius 80 mm,
+/// lead 8° ± 2°, tilt 3°), with `poses` poses 0.015 mm apart.
+pub fn five_axis_poses(poses: usize, cutter: &Cutter) -> Vec<Pose> {
+    let spec = PassSpec {
+        surface: TestSurface::Cylinder { radius_mm: 80.0 },
+        v_mm: 0.0,
+        u0_mm: -0.0075 * poses as f64,
+        poses,
+        step_mm: 0.015,
+        lead_deg: 8.0,
+        lead_wobble_deg: 2.0,
+        wobble_period_mm: 60.0,
+        tilt_deg: 3.0,
+    };
+    pass(&spec, cutter).moves.iter().map(|m| m.pose).collect()
+}
+
+/// The CL poses of a planned 3-axis path in machine order (plunge and cut tips).
+pub fn plan_poses(toolpath: &Toolpath) -> Vec<Pose> {
+    toolpath
+        .moves
+        .iter()
+        .filter(|m| matches!(m.kind, MoveKind::Cut | MoveKind::Plunge))
+        .map(|m| m.pose)
+        .collect()
+}
+
+/// Where the measure stage's time goes, for one verification (one run each).
+#[derive(Debug, Clone, Copy)]
+pub struct MeasureBreakdown {
+    /// Seconds for `TriangleBvh::new` over the forward swept surface.
+    pub bvh_s: f64,
+    /// Seconds for `measure_with_bvh` against the forward sweep (all refined vertices).
+    pub forward_s: f64,
+    /// Microseconds per vertex of that forward measurement.
+    pub us_per_vertex: f64,
+    /// Mean number of swept triangles each vector crosses (every `SAMPLE_EVERY`-th vertex).
+    pub crossings_per_vector: f64,
+    /// Largest number of crossings of one sampled vector.
+    pub max_crossings: usize,
+    /// Forward swept triangles between imprint curves.
+    pub strip_triangles: usize,
+    /// Forward swept triangles on caps (tool surface at run ends and sharp turns).
+    pub cap_triangles: usize,
+}
+
+/// Vertex sampling stride for the crossing counts.
+pub const SAMPLE_EVERY: usize = 97;
+
+/// Re-times the forward half of the measure stage of `v` and counts vector crossings.
+pub fn measure_breakdown(
+    v: &cam_verify::Verification,
+    cfg: &VerifyConfig,
+) -> Result<MeasureBreakdown> {
+    use cam_verify::deviation::{TriangleBvh, measure_with_bvh};
+    use cam_verify::sweep::FacetKind;
+    let cap_triangles = v
+        .swept
+        .kind
+        .iter()
+        .filter(|k| **k == FacetKind::Cap)
+        .count();
+    let t = Instant::now();
+    let bvh = TriangleBvh::new(&v.swept.triangles);
+    let bvh_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let devs = measure_with_bvh(&v.refined, &bvh, &v.swept.source_move, &cfg.deviation)?;
+    let forward_s = t.elapsed().as_secs_f64();
+    let (mut sum, mut max, mut n) = (0usize, 0usize, 0usize);
+    for i in (0..v.refined.len()).step_by(SAMPLE_EVERY) {
+        let mut c = 0;
+        bvh.segment_hits(
+            v.refined.positions[i],
+            v.refined.normals[i],
+            -cfg.deviation.inside_mm,
+            cfg.deviation.outside_mm,
+            |_| c += 1,
+        );
+        sum += c;
+        max = max.max(c);
+        n += 1;
+    }
+    Ok(MeasureBreakdown {
+        bvh_s,
+        forward_s,
+        us_per_vertex: forward_s * 1e6 / devs.len().max(1) as f64,
+        crossings_per_vector: sum as f64 / n.max(1) as f64,
+        max_crossings: max,
+        strip_triangles: v.swept.kind.len() - cap_triangles,
+        cap_triangles,
+    })
+}
+
+fn rate(points: usize, s: f64) -> String {
+    format!("{:.1}M", points as f64 / s / 1e6)
+}
+
+/// Runs the benchmark and prints the tables.
+pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
+    let pc = &cfg.plan;
+    println!(
+        "verify benchmark; best of {} (imprint: best call over >= {} s); {} rayon threads in \
+         the global pool; {}\n",
+        pc.runs,
+        cfg.imprint_min_s,
+        rayon::current_num_threads(),
+        crate::load_average()
+    );
+
+    // (a) imprint points per second.
+    let mut imprint = String::from(
+        "| path | cutter | placement | poses | points (Q = 40, 21 per curve) | frames ms | \
+         curves 1 thread ms | curves 2 threads ms | points/s 1 thread | points/s 2 threads \
+         (target >= 10M) | points/s 2 threads incl. frames |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    let bull: Cutter = "bull:38:3".parse()?;
+    let five = five_axis_poses(cfg.imprint_poses, &bull);
+    let dome = planbench::load(&crate::repo_root().join("fixtures/parts/dome.obj"))?;
+    let ball: Cutter = "ball:6".parse()?;
+    let (dome_plan, _) = planbench::time_plan(&dome, pc, ball)?;
+    let dome_poses = plan_poses(&dome_plan.toolpath);
+    let paths: [(&str, &Cutter, &[Pose]); 2] = [
+        ("5-axis pass on a cylinder (testpaths)", &bull, &five),
+        ("dome.obj plan, 3-axis", &ball, &dome_poses),
+    ];
+    for (name, cutter, poses) in paths {
+        for placement in [Placement::Adaptive, Placement::Uniform] {
+            let t = time_imprint(poses, cutter, placement, pc.runs, cfg.imprint_min_s)?;
+            let line = format!(
+                "| {name} | {cutter} | {placement:?} | {} | {} | {:.2} | {:.2} | {:.2} | {} | {} \
+                 | {} |\n",
+                t.poses,
+                t.points,
+                t.frames_s * 1e3,
+                t.curves_1t_s * 1e3,
+                t.curves_2t_s * 1e3,
+                rate(t.points, t.curves_1t_s),
+                rate(t.points, t.curves_2t_s),
+                rate(t.points, t.curves_2t_s + t.frames_s),
+            );
+            eprint!("{line}");
+            imprint.push_str(&line);
+        }
+    }
+    println!(
+        "Imprint points per second ({}):\n\n{imprint}",
+        crate::load_average()
+    );
+    println!(
+        "curves: Imprinter::curves (all poses, cutting half) inside a rayon pool of 1 or 2 \
+         threads; frames: transport_frames (serial, once per path). Imprinter::new (placement \
+         tables) not included.\n"
+    );
+
+    // (b) verify vs plan.
+    let mut breakdown = String::from(
+        "| part | cutter | fwd BVH build s | fwd measure s | us per vertex (2 threads) | \
+         crossings per vector (mean, sampled) | max crossings | fwd strip triangles | fwd cap \
+         triangles |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+    );
+    let mut table = String::from(
+        "| part | tris | cutter | moves | plan s | verify s | sweep s | refine s | measure s | \
+         other s | refined vertices | swept triangles (fwd) | max gouge mm | max excess mm | \
+         verify/plan (target <= 1) |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | \
+         --- |\n",
+    );
+    for path in &pc.parts {
+        let mesh = planbench::load(path)?;
+        let name = planbench::part_name(path);
+        for spec in &pc.cutters {
+            let cutter: Cutter = spec.parse()?;
+            let line = match planbench::time_plan(&mesh, pc, cutter) {
+                Err(e) => format!("| {name} | {} | {spec} | plan failed: {e} |\n", mesh.len()),
+                Ok((plan, plan_s)) => {
+                    let vc = VerifyConfig::new(pc.tolerance_mm);
+                    let (r, verify_s) =
+                        best_of(pc.runs, || verify(&mesh, &plan.toolpath, &cutter, &vc));
+                    match r {
+                        Err(e) => format!(
+                            "| {name} | {} | {spec} | {} | {plan_s:.3} | verify failed after \
+                             {verify_s:.3} s: {e} |\n",
+                            mesh.len(),
+                            plan.toolpath.moves.len()
+                        ),
+                        Ok(v) => {
+                            let b = measure_breakdown(&v, &vc)?;
+                            breakdown.push_str(&format!(
+                                "| {name} | {spec} | {:.3} | {:.3} | {:.1} | {:.1} | {} | {} | {} \
+                                 |\n",
+                                b.bvh_s,
+                                b.forward_s,
+                                b.us_per_vertex,
+                                b.crossings_per_vector,
+                                b.max_crossings,
+                                b.strip_triangles,
+                                b.cap_triangles
+                            ));
+                            let t = v.timings;
+                            format!(
+                                "| {name} | {} | {spec} | {} | {plan_s:.3} | {verify_s:.3} | \
+                                 {:.3} | {:.3} | {:.3} | {:.3} | {} | {} | {:.4} | {:.4} | \
+                                 {:.2} |\n",
+                                mesh.len(),
+                                plan.toolpath.moves.len(),
+                                t.sweep_s,
+                                t.refine_s,
+                                t.measure_s,
+                                verify_s - t.sweep_s - t.refine_s - t.measure_s,
+                                v.refined.len(),
+                                v.swept.triangles.len(),
+                                v.report.max_gouge_mm,
+                                v.report.max_excess_mm,
+                                verify_s / plan_s,
+                            )
+                        }
+                    }
+                }
+            };
+            eprint!("{line}");
+            table.push_str(&line);
+        }
+    }
+    println!(
+        "cam_verify::verify vs cam_plan::plan_part, tau = {} mm, h = {} mm, \
+         VerifyConfig::new({}) (Q = 40, e = 0.005 mm, back gouges on); {}:\n\n{table}",
+        pc.tolerance_mm,
+        pc.scallop_mm,
+        pc.tolerance_mm,
+        crate::load_average()
+    );
+    println!(
+        "Stage timings are from the best verify run (Verification::timings): sweep = forward \
+         and reverse sweeps, refine = design-surface refinement, measure = BVHs of the swept \
+         surfaces and normal-vector deviations; other = the rest (report)."
+    );
+    println!(
+        "\nMeasure stage, forward sweep only, re-run once outside verify (TriangleBvh::new, \
+         measure_with_bvh); crossings: swept triangles each normal vector (t from -L_in to \
+         L_out) crosses, every {SAMPLE_EVERY}th refined vertex:\n\n{breakdown}"
+    );
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn imprint_timing_counts_points() {
+        let cutter: Cutter = "bull:10:2".parse().unwrap();
+        let poses = five_axis_poses(50, &cutter);
+        assert_eq!(poses.len(), 50);
+        let t = time_imprint(&poses, &cutter, Placement::Uniform, 1, 0.0).unwrap();
+        assert_eq!((t.poses, t.points), (50, 50 * 21));
+        assert!(t.curves_1t_s > 0.0 && t.curves_2t_s > 0.0);
+    }
+}
