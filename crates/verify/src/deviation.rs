@@ -387,27 +387,7 @@ fn build(tris: &[Triangle], nodes: &mut Vec<Node>, ni: usize, lo: usize, hi: usi
 }
 
 fn slab(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
-    let (mut lo, mut hi) = (t0, t1);
-    for a in 0..3 {
-        if inv[a].is_infinite() {
-            // Segment parallel to this slab: inside or out for all t.
-            if o[a] < min[a] || o[a] > max[a] {
-                return false;
-            }
-            continue;
-        }
-        let ta = (min[a] - o[a]) * inv[a];
-        let tb = (max[a] - o[a]) * inv[a];
-        let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
-        // Widen by a relative hair so that rounding never drops a hit on a box face.
-        let pad = 1e-12 * (1.0 + ta.abs().max(tb.abs()));
-        lo = lo.max(ta - pad);
-        hi = hi.min(tb + pad);
-        if lo > hi {
-            return false;
-        }
-    }
-    true
+    slab_entry(o, inv, min, max, t0, t1).is_some()
 }
 
 /// Möller–Trumbore segment/triangle intersection with inclusive barycentric bounds.
