@@ -1,10 +1,6 @@
 //! `cam plan` end to end: tool choice, holder policies, outputs and bad input.
 
-use crate::support::{cam, stderr, write};
-
-fn root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+use crate::support::{cam, root, stderr, write};
 
 fn pocket() -> String {
     root()
@@ -149,8 +145,8 @@ fn plan_bad_values_exit_2() {
         vec!["--stock", "1,0,0,1"],
         vec!["--tool-library", "/nonexistent.json"],
     ] {
-        let mut a = vec!["plan", "/dev/null/x.obj"];
-        a[1] = Box::leak(pocket().into_boxed_str());
+        let part = pocket();
+        let mut a = vec!["plan", part.as_str()];
         a.extend(args.iter().copied());
         a.extend(["-o", out.to_str().unwrap()]);
         let o = cam(&a);

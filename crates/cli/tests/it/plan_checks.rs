@@ -28,14 +28,12 @@ use cam_gcode::{Post, PostJob, ReadConfig, parse_gcode, post_to_string};
 use cam_plan::{Plan, PlanConfig, plan_part};
 use cam_verify::zmap::{Zmap, ZmapConfig, ZmapGrid, compare_with_part, machine};
 
+use crate::support::root;
+
 /// Largest 3-D displacement (mm) of a re-read tip from the planned one: 4 decimals in mm.
 const ROUND_MM: f64 = 8.7e-5; // √3 · 5e-5 = 8.66e-5
 /// The planner's documented relative slack on h.
 const H_REL: f64 = 1e-3;
-
-fn root() -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
 
 fn fixture(name: &str) -> Mesh {
     Mesh::load(root().join("fixtures/parts").join(name), Units::Mm).expect("fixture loads")
