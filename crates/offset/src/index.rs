@@ -9,15 +9,15 @@ use crate::{ClPoint, Contact, ContactKind, Grid};
 
 /// Precomputed per-triangle data, stored in descending order of top z.
 #[derive(Debug, Clone)]
-struct Tri {
-    v: [DVec3; 3],
+pub(crate) struct Tri {
+    pub(crate) v: [DVec3; 3],
     /// Unit normal turned upwards (n.z ≥ 0).
-    n: DVec3,
+    pub(crate) n: DVec3,
     /// Highest z of the triangle: no contact with it can put the tip higher.
-    top: f64,
+    pub(crate) top: f64,
     /// XY bounds.
-    lo: [f64; 2],
-    hi: [f64; 2],
+    pub(crate) lo: [f64; 2],
+    pub(crate) hi: [f64; 2],
     /// Index in the mesh.
     orig: u32,
     /// Bit k (k < 3): this triangle tests edge k (v[k] → v[k+1]); bit 3 + k: it tests
@@ -107,18 +107,20 @@ fn assign_ownership(tris: &mut [Tri]) {
 #[derive(Debug, Clone)]
 pub struct DropCutter {
     cutter: Cutter,
-    pf: Profile,
-    tris: Vec<Tri>,
+    pub(crate) pf: Profile,
+    pub(crate) tris: Vec<Tri>,
+    /// Slot in `tris` of each mesh triangle.
+    pub(crate) slot_of: Vec<u32>,
     /// Cell grid origin, cell size and counts.
-    ox: f64,
-    oy: f64,
-    cell: f64,
-    nx: usize,
-    ny: usize,
+    pub(crate) ox: f64,
+    pub(crate) oy: f64,
+    pub(crate) cell: f64,
+    pub(crate) nx: usize,
+    pub(crate) ny: usize,
     /// CSR: items[start[c]..start[c+1]] are the triangle slots of cell c (ascending slot =
     /// descending top z).
-    start: Vec<u32>,
-    items: Vec<u32>,
+    pub(crate) start: Vec<u32>,
+    pub(crate) items: Vec<u32>,
 }
 
 /// Points dropped in sequence (sharing pruning floors) per parallel task.
@@ -156,6 +158,10 @@ impl DropCutter {
         // Descending top z; ties by mesh order so the layout is deterministic.
         tris.sort_by(|p, q| q.top.total_cmp(&p.top).then(p.orig.cmp(&q.orig)));
         assign_ownership(&mut tris);
+        let mut slot_of = vec![0u32; tris.len()];
+        for (slot, t) in tris.iter().enumerate() {
+            slot_of[t.orig as usize] = slot as u32;
+        }
 
         let b = mesh.bounds();
         let (ox, oy) = (b.min.x - big_r, b.min.y - big_r);
@@ -206,6 +212,7 @@ impl DropCutter {
             cutter,
             pf,
             tris,
+            slot_of,
             ox,
             oy,
             cell,
@@ -236,7 +243,7 @@ impl DropCutter {
     /// The exact contact, skipping features that cannot reach `floor`. `floor` must not
     /// exceed the true tip height (callers pass a proven lower bound minus a rounding
     /// margin); the result is then bit-for-bit the same as [`DropCutter::contact`].
-    fn contact_above(&self, x: f64, y: f64, floor: f64) -> Option<Contact> {
+    pub(crate) fn contact_above(&self, x: f64, y: f64, floor: f64) -> Option<Contact> {
         if !(x.is_finite() && y.is_finite()) {
             return None;
         }
@@ -312,10 +319,7 @@ impl DropCutter {
     fn drop_run(&self, xy: impl Iterator<Item = (f64, f64)>, out: &mut [ClPoint]) {
         let mut prev: Option<DVec3> = None;
         for ((x, y), slot) in xy.zip(out.iter_mut()) {
-            let floor = prev
-                .and_then(|cc| contact::vertex(&self.pf, x, y, cc))
-                .map_or(f64::NEG_INFINITY, |(z, _)| z - FLOOR_MARGIN);
-            let c = self.contact_above(x, y, floor);
+            let c = self.contact_hinted(x, y, prev.as_slice());
             prev = c.map(|c| c.cc).or(prev);
             *slot = ClPoint {
                 x,
@@ -323,6 +327,38 @@ impl DropCutter {
                 z_tip: c.map(|c| c.z_tip),
             };
         }
+    }
+
+    /// Like [`DropCutter::contact`], faster when `hints` holds points of the part near the
+    /// contact (e.g. a neighbouring query's contact point): the cutter resting on a hint is
+    /// a proven lower bound that prunes the search. The result is bit-for-bit the same as
+    /// [`DropCutter::contact`] whatever the hints, as long as they are points of the part
+    /// (contact points returned by this index are).
+    pub fn contact_hinted(&self, x: f64, y: f64, hints: &[DVec3]) -> Option<Contact> {
+        let floor = hints
+            .iter()
+            .filter_map(|&cc| contact::vertex(&self.pf, x, y, cc))
+            .map(|(z, _)| z - FLOOR_MARGIN)
+            .fold(f64::NEG_INFINITY, f64::max);
+        self.contact_above(x, y, floor)
+    }
+
+    /// Contacts at every `(x, y)` in order, in parallel runs in which each contact point
+    /// prunes the next query (so points along a line are cheap); identical for any thread
+    /// count and to [`DropCutter::contact`] point by point.
+    pub fn contact_points(&self, xy: &[(f64, f64)]) -> Vec<Option<Contact>> {
+        let mut out = vec![None; xy.len()];
+        out.par_chunks_mut(RUN)
+            .zip(xy.par_chunks(RUN))
+            .for_each(|(o, p)| {
+                let mut prev: Option<DVec3> = None;
+                for (&(x, y), slot) in p.iter().zip(o.iter_mut()) {
+                    let c = self.contact_hinted(x, y, prev.as_slice());
+                    prev = c.map(|c| c.cc).or(prev);
+                    *slot = c;
+                }
+            });
+        out
     }
 
     /// Drops at every `(x, y)` in order, in parallel; identical for any thread count (and

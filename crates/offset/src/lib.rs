@@ -5,10 +5,12 @@
 //! all triangles of the vertex, edge and facet contact heights, each in closed form (the
 //! torus–edge contact by a safeguarded Newton iteration converged to < 1e-12 mm).
 
+mod certify;
 mod contact;
 mod grid;
 mod index;
 
+pub use certify::{COPLANAR_MM, PlaneCertificate};
 pub use contact::{Contact, ContactKind};
 pub use grid::{ClPoint, Grid};
 pub use index::DropCutter;

@@ -2,6 +2,7 @@
 
 mod analytic;
 mod brute;
+mod certify;
 mod ocl;
 mod support;
 mod threads;
