@@ -2,7 +2,6 @@
 //! time for the same number of CL points, and the holder check's share of the plan time.
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::{Context, Result};
@@ -111,26 +110,6 @@ pub fn time_plan(
     r.map(|p| (p, s))
 }
 
-/// Drop-cutter queries (`DropCutter::drop`) one `plan_part` makes: the same steps as
-/// `plan_part` with a counting CL surface (an extra, untimed run).
-pub fn count_drop_calls(
-    mesh: &Mesh,
-    cfg: &PlanBenchConfig,
-    cutter: Cutter,
-) -> Result<usize, cam_plan::PlanError> {
-    let pc = cfg.plan_config(cutter);
-    let (c, _) = pc.validate()?;
-    let dc = DropCutter::new(mesh, cutter);
-    let sampler = cam_plan::SectionSampler::new(mesh, pc.angle_deg, c, cutter.radius());
-    let n = AtomicUsize::new(0);
-    let surface = |x: f64, y: f64| {
-        n.fetch_add(1, Ordering::Relaxed);
-        dc.drop(x, y)
-    };
-    cam_plan::plan(&surface, &sampler, &pc, None)?;
-    Ok(n.into_inner())
-}
-
 /// Runs the benchmark and prints the table.
 pub fn plan(cfg: &PlanBenchConfig) -> Result<()> {
     println!(
@@ -182,14 +161,12 @@ pub fn plan(cfg: &PlanBenchConfig) -> Result<()> {
                         cam_holder::min_stick_out(&mesh, &asm, &plan.toolpath, &check)
                     });
                     let holder_s = check_s + stick_s;
-                    let (calls, per, est) = match count_drop_calls(&mesh, cfg, cutter) {
-                        Ok(n) => (
-                            n.to_string(),
-                            format!("{:.1}", n as f64 / xy.len() as f64),
-                            format!("{:.2}", drop_s * n as f64 / xy.len() as f64),
-                        ),
-                        Err(e) => (format!("failed: {e}"), String::new(), String::new()),
-                    };
+                    let n = plan.drops;
+                    let (calls, per, est) = (
+                        n.to_string(),
+                        format!("{:.1}", n as f64 / xy.len() as f64),
+                        format!("{:.2}", drop_s * n as f64 / xy.len() as f64),
+                    );
                     format!(
                         "| {name} | {} | {spec} | {} | {} | {plan_s:.3} | {drop_s:.3} | {:.1}x | \
                          {check_s:.3} | {stick_s:.3} | {:.0} % | {} | {} | {calls} | {per} | {est} |\n",
@@ -216,8 +193,7 @@ pub fn plan(cfg: &PlanBenchConfig) -> Result<()> {
          cut and plunge tips). holder: cam_holder::check_toolpath and cam_holder::min_stick_out \
          (default ER-collet assembly of the cutter, CheckConfig::default()), each building its \
          own HolderChecker; holder/plan = (check + min stick-out) / plan. planner drop calls: \
-         DropCutter::drop queries counted in one extra run of the same steps as plan_part; \
-         drop s for those calls = drop-cutter s x calls per CL point. {}",
+         exact CL samples the plan made (Plan::drops); drop s for those calls = drop-cutter s x calls per CL point. {}",
         crate::load_average()
     );
     Ok(())
@@ -241,9 +217,13 @@ mod tests {
         let xy = cl_xy(&plan.toolpath);
         assert!(plan.passes > 1, "{}", plan.passes);
         assert_eq!(xy.len(), plan.cl_points);
-        // The planner queries the CL surface at least once per CL point.
-        let calls = count_drop_calls(&mesh, &cfg, "ball:6".parse().unwrap()).unwrap();
-        assert!(calls >= plan.cl_points, "{calls} < {}", plan.cl_points);
+        // The planner samples the CL surface at least once per CL point.
+        assert!(
+            plan.drops >= plan.cl_points,
+            "{} < {}",
+            plan.drops,
+            plan.cl_points
+        );
         // Every CL point is on the CL surface: dropping the cutter there gives the plan's z.
         let dc = DropCutter::new(&mesh, cfg.plan_config("ball:6".parse().unwrap()).cutter);
         let tips: Vec<f64> = plan

@@ -106,6 +106,7 @@ impl DropCutter {
         let (j0, j1) = (ci(y0, self.oy, self.ny), ci(y1, self.oy, self.ny));
         let mut rise = 0.0f64;
         let mut cover: Vec<(f64, f64)> = Vec::new();
+        let reach_box = (x0 - big_r, y0 - big_r, x1 + big_r, y1 + big_r);
         let seg = (b.0 - a.0, b.1 - a.1);
         let seg_len2 = seg.0 * seg.0 + seg.1 * seg.1;
         for j in j0..=j1 {
@@ -135,18 +136,28 @@ impl DropCutter {
                     if t.top < plane_lo - COPLANAR_MM {
                         break;
                     }
-                    // Within reach of the segment?
-                    let dx = seg_rect_dist2(a, b, (t.lo[0], t.lo[1], t.hi[0], t.hi[1]));
-                    if dx > big_r * big_r {
+                    // Quick reject: bounding boxes more than R apart.
+                    if t.lo[0] > reach_box.2
+                        || t.hi[0] < reach_box.0
+                        || t.lo[1] > reach_box.3
+                        || t.hi[1] < reach_box.1
+                    {
                         continue;
                     }
                     let h = t.v.map(|p| n.dot(p) - d);
                     let hmax = h[0].max(h[1]).max(h[2]);
-                    let hmin = h[0].min(h[1]).min(h[2]);
-                    if hmax <= COPLANAR_MM && hmin >= -COPLANAR_MM {
-                        if let Some(iv) = clip_segment_triangle(ca, cb, &t.v) {
+                    if hmax <= COPLANAR_MM {
+                        let hmin = h[0].min(h[1]).min(h[2]);
+                        if hmin >= -COPLANAR_MM
+                            && let Some(iv) = clip_segment_triangle(ca, cb, &t.v)
+                        {
                             cover.push(iv);
                         }
+                        continue; // at or below the plane: cannot raise the cutter
+                    }
+                    // Rises above the plane: does it come within reach of the segment?
+                    let dx = seg_rect_dist2(a, b, (t.lo[0], t.lo[1], t.hi[0], t.hi[1]));
+                    if dx > big_r * big_r {
                         continue;
                     }
                     if hmax > max_rise_mm {

@@ -4,22 +4,11 @@
 //!
 //! `cargo run --release -p cam-plan --example plan_part -- fixtures/parts/dome.obj ball:6 0.01 0.01`
 
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use cam_core::{Mesh, Units};
+use cam_core::{Mesh, MoveKind, Units};
 use cam_offset::DropCutter;
-use cam_plan::{ClSurface, PlanConfig, SectionSampler, plan};
-
-/// Counts the drops the planner asks for.
-struct Counting<'a>(&'a DropCutter, AtomicUsize);
-
-impl ClSurface for Counting<'_> {
-    fn z_tip(&self, x: f64, y: f64) -> Option<f64> {
-        self.1.fetch_add(1, Ordering::Relaxed);
-        self.0.drop(x, y)
-    }
-}
+use cam_plan::{PlanConfig, plan_part};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -37,21 +26,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..PlanConfig::default()
     };
     let t = Instant::now();
-    let (c, _) = cfg.validate()?;
-    let dc = DropCutter::new(&mesh, cfg.cutter);
-    let counting = Counting(&dc, AtomicUsize::new(0));
-    let sampler = SectionSampler::new(&mesh, cfg.angle_deg, c, cfg.cutter.radius());
-    let mut p = plan(&counting, &sampler, &cfg, None)?;
+    let mut p = plan_part(&mesh, &cfg, None)?;
     let secs = t.elapsed().as_secs_f64();
-    // The drop-cutter alone on as many points as the plan has CL points.
+    // The drop-cutter alone (index included) on as many points as the plan has CL points.
     let xy: Vec<(f64, f64)> = p
         .toolpath
         .moves
         .iter()
-        .filter(|m| m.pass.is_some())
+        .filter(|m| matches!(m.kind, MoveKind::Cut | MoveKind::Plunge))
         .map(|m| (m.pose.tip.x, m.pose.tip.y))
         .collect();
     let t = Instant::now();
+    let dc = DropCutter::new(&mesh, cfg.cutter);
     let _ = dc.drop_points(&xy);
     let drop_secs = t.elapsed().as_secs_f64();
     let moves = p.toolpath.moves.len();
@@ -59,9 +45,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     p.pass_v_mm.clear();
     println!("{}", serde_json::to_string_pretty(&p)?);
     println!(
-        "{{\"part\": \"{path}\", \"cutter\": \"{}\", \"moves\": {moves}, \"drops\": {}, \"seconds\": {secs:.3}, \"drop_seconds_for_cl_points\": {drop_secs:.4}}}",
+        "{{\"part\": \"{path}\", \"cutter\": \"{}\", \"moves\": {moves}, \"cl_points\": {}, \"drops\": {}, \"drops_per_cl_point\": {:.2}, \"seconds\": {secs:.3}, \"drop_seconds_for_cl_points\": {drop_secs:.4}, \"ratio\": {:.2}}}",
         cfg.cutter,
-        counting.1.load(Ordering::Relaxed)
+        xy.len(),
+        p.drops,
+        p.drops as f64 / xy.len() as f64,
+        secs / drop_secs
     );
     Ok(())
 }

@@ -117,6 +117,26 @@ pub enum PlanError {
 }
 
 impl PlanConfig {
+    /// The spacing (mm) of the first samples along a pass: constant arc length on the part's
+    /// sections (the seed's discretisation) and a grid of the same spacing. Refinement only
+    /// ever adds samples, so starting coarse costs nothing where a profile needs detail and
+    /// saves drops where it is planar: the cutter radius, or four times the finest sample
+    /// spacing if that is larger.
+    ///
+    /// # Errors
+    /// As [`PlanConfig::validate`].
+    pub fn section_step_mm(&self) -> Result<f64, PlanError> {
+        let (c, _) = self.validate()?;
+        let chk = crate::feed::Check::new(
+            self.tolerance_mm,
+            self.cutter.corner_radius(),
+            self.cutter.radius(),
+            c,
+            f64::INFINITY,
+        );
+        Ok(self.cutter.radius().max(4.0 * chk.spacing))
+    }
+
     /// Checks every value; returns the check spacing (mm) and the acceptance threshold (mm)
     /// for deviations at profile points, `0.8·τ`.
     ///

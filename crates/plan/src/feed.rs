@@ -1,53 +1,134 @@
-//! Feed-forward marching along one pass: exact CL profile, then the longest chords that stay
-//! within the tolerance of the exact CL surface at every check point.
+//! Feed-forward marching along one pass: an exact, adaptively refined CL profile whose gaps
+//! carry bounds on the CL surface between their samples, then the longest moves those bounds
+//! prove to stay within the tolerance.
 //!
 //! A pass is the line `v = const` of the raster frame. Its profile is the exact tool-tip z at
-//! a set of `u` positions: the caller's samples (constant arc length on the part) merged with
-//! a uniform grid of spacing `c`, then refined ([`refine`]) until every neighbour pair passes
-//! the linearity test (the exact z at their midpoint within η/2 of their chord, η = 0.2·τ).
-//! Marching (the paper's Algorithm 1 with an exact check) goes from CL point `L_i` to the
-//! farthest profile point `L_k` it can find for which the straight move `L_i → L_k` differs
-//! from the exact CL z by at most `τ − η` at every profile point strictly between them. The
-//! search starts at the Eq. 1 step estimate and gallops up or bisects down from there.
-//! Between profile points the CL surface is within η of the profile polyline (for a single
-//! crease or constant curvature between them), so the move is within τ.
+//! sorted `u` positions (the caller's samples, constant arc length on the part), refined until
+//! every gap between neighbouring samples is one of (see `docs/plan-math.md` §1):
+//!
+//! * **planar**: both samples rest on one plane, every triangle within the cutter's reach of
+//!   the gap lies at most `rise` above it and coplanar facets carry the contact: the CL
+//!   surface there is the plane's, raised by at most `rise / n.z`;
+//! * **lemma** (ball and bull): the samples are at most `s` apart in 3-D, so any move through
+//!   points no deeper than `g` below them penetrates the part by at most
+//!   `r − sqrt((r − g)² − L²/4)` between them (`r` the corner radius); and the contact
+//!   pieces of the two samples bound the CL surface's dip below their chord by `dip`;
+//! * **sampled** (flat end mill, or surfaces without certificates): the exact z at the
+//!   midpoint is within η/2 of the chord and the slope does not jump (a sampling argument,
+//!   not a proof);
+//! * **break** (the cutter touches nothing in between) or **unresolved** (closer than
+//!   [`MIN_DU_MM`] and not certified: a vertical CL wall).
+//!
+//! Marching (the seed's Algorithm 1 from its Eq. 1 estimate) then joins `L_i` to the farthest
+//! `L_k` whose move the gap bounds prove: penetration ≤ τ and vertical excess ≤ τ.
 
-use crate::{ClSurface, frame::Raster};
+use cam_core::DVec3;
 
-/// Fraction η/τ of the tolerance reserved for the CL surface between profile points: the
-/// profile is refined until every neighbour pair's fresh midpoint is within η/2 of their
-/// chord, and moves are accepted at 1 − η/τ of τ at the profile points.
+use crate::{ClSample, ClSurface, frame::Raster};
+
+/// Fraction η/τ reserved for the CL surface between samples on the sampled (heuristic) path:
+/// gaps are refined until the fresh midpoint is within η/2 of the chord; moves are accepted
+/// at `τ − η` at the samples and midpoints.
 pub const LINEARITY_FRACTION: f64 = 0.2;
 
-/// Two profile points closer than this (mm, along `u`) are joined without a check.
+/// Share of τ the lemma's spacing term uses on its own: samples are refined to a 3-D spacing
+/// `s` with `r − sqrt(r² − s²/4) = SPACING_FRACTION · τ`; the rest of τ is left for moves
+/// spanning several samples.
+pub const SPACING_FRACTION: f64 = 1.0;
+
+/// Largest certified dip of the CL surface below a gap's chord, as a share of τ.
+pub const DIP_FRACTION: f64 = 0.25;
+
+/// Largest rise of material above a plane accepted for a planar gap, as a share of τ.
+pub const RISE_FRACTION: f64 = 0.25;
+
+/// Gaps shorter than this (mm, along `u`) are not refined further.
 pub const MIN_DU_MM: f64 = 1e-5;
 
 /// Where the CL surface ends, located to this precision (mm, along `u`).
 pub const EDGE_TOL_MM: f64 = 1e-5;
 
-/// A pass's exact profile: points `(u, z_tip)` in increasing `u`; `brk[j]` is true when the
-/// cutter touches nothing somewhere between point `j` and `j + 1` (they must not be joined).
+/// A triangle whose vertices are within this distance (mm) of a plane lies in it (the
+/// drop-cutter's rule, `cam_offset::COPLANAR_MM`).
+const COPLANAR_MM: f64 = 1e-9;
+
+/// What is known about the CL surface between two neighbouring samples.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Gap {
+    /// The cutter touches nothing somewhere in between: never joined.
+    Break,
+    /// Not yet classified.
+    Pending,
+    /// Planar: material rises at most `rise` (mm, along the normal) above the samples'
+    /// plane, whose normal has z component `nz`; coplanar facets carry the contact.
+    Planar { rise: f64, nz: f64 },
+    /// Certified by the samples: gouge by the lemma (ball/bull) or, with `mid`, by the
+    /// midpoint test; excess by `dip` (certified, vertical mm) or the midpoint.
+    Open { dip: Option<f64>, mid: Option<f64> },
+    /// Closer than [`MIN_DU_MM`] and still not certified; `dz` is the z step (mm).
+    Unresolved { dz: f64 },
+}
+
+/// A pass's exact profile: samples `(u, z_tip)` in increasing `u`, their certificates, and
+/// the gap after each sample (`gaps[j]` lies between samples `j` and `j + 1`; the last is a
+/// `Break`).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Profile {
     pub pts: Vec<(f64, f64)>,
-    pub brk: Vec<bool>,
-    /// Exact z at the midpoint of each pair `j, j + 1` where it was dropped (refinement).
-    pub mids: Vec<Option<f64>>,
+    pub cert: Vec<ClSample>,
+    pub gaps: Vec<Gap>,
+    /// Drop-cutter samples this profile cost (including edge searches and midpoints).
+    pub drops: usize,
 }
 
-/// Parameters of the chord check.
+/// Parameters of the profile refinement and the move check.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Check {
-    /// Largest accepted deviation at profile points (mm): τ − η = 0.8·τ.
-    pub accept: f64,
-    /// Check spacing (mm).
-    pub spacing: f64,
     /// τ (mm).
     pub tau: f64,
+    /// Corner radius r (mm) for the lemma; 0 for a flat end mill (sampled path).
+    pub corner: f64,
+    /// Largest gap between samples (mm): 3-D for the lemma, along `u` for the sampled path.
+    pub spacing: f64,
+    /// Acceptance (mm) at samples and midpoints on the sampled path: τ − η.
+    pub accept: f64,
+    /// η (mm), the sampled path's linearity budget.
+    pub eta: f64,
+    /// Largest certified dip (mm) accepted for a gap.
+    pub dip_budget: f64,
+    /// Largest planar rise (mm) accepted for a gap.
+    pub rise_budget: f64,
     /// Longest move (mm, 3-D).
     pub max_step: f64,
-    /// Cutter radius (mm), the scale of the curvature estimate.
+    /// Cutter radius (mm), the scale of the Eq. 1 estimate.
     pub radius: f64,
+}
+
+impl Check {
+    /// The check for cutter corner radius `corner`, radius `radius`, tolerance `tau`, with
+    /// `sampled_spacing` the sample spacing of the sampled path.
+    pub fn new(tau: f64, corner: f64, radius: f64, sampled_spacing: f64, max_step: f64) -> Check {
+        let eta = LINEARITY_FRACTION * tau;
+        let spacing = if corner > 0.0 {
+            let e = (SPACING_FRACTION * tau).min(corner);
+            2.0 * (corner * corner - (corner - e) * (corner - e))
+                .max(0.0)
+                .sqrt()
+        } else {
+            sampled_spacing
+        };
+        Check {
+            tau,
+            corner,
+            spacing,
+            accept: tau - eta,
+            eta,
+            dip_budget: DIP_FRACTION * tau,
+            rise_budget: RISE_FRACTION * tau,
+            max_step,
+            radius,
+        }
+    }
 }
 
 /// Outcome of marching one pass.
@@ -55,185 +136,68 @@ pub(crate) struct Check {
 pub(crate) struct Marched {
     /// Runs of CL points `(u, z)`, each joined by cut moves; runs are separated by gaps.
     pub runs: Vec<Vec<(f64, f64)>>,
-    /// Largest checked deviation (mm) over accepted moves.
+    /// Largest bound (mm) over accepted moves: penetration (normal) or vertical excess.
     pub max_dev: f64,
-    /// Neighbours closer than [`MIN_DU_MM`] joined although their check failed
-    /// (a vertical CL wall, e.g. a flat cutter stepping over an edge).
+    /// Joins across unresolved gaps (vertical CL walls).
     pub unresolved: usize,
-    /// Largest deviation (mm) at those unresolved joins.
+    /// Largest z step (mm) at those joins.
     pub unresolved_dev: f64,
+    /// Moves whose bound rests on the sampled (heuristic) path somewhere.
+    pub sampled_moves: usize,
 }
 
-/// Refines the profile until every joinable neighbour pair passes two tests:
-///
-/// 1. **midpoint**: the exact z at the pair's midpoint is within `eta / 2` of their chord;
-/// 2. **crease**: the pair's length times the change of chord slope to either joinable
-///    neighbour pair is at most `eta` (a crease of the CL section near the pair, or strong
-///    curvature, shows as a slope jump even when the midpoint happens to fit).
-///
-/// Failing pairs are split at their (already dropped) midpoint and tested again, down to
-/// [`MIN_DU_MM`]; pairs that still fail there are counted, with the larger of their two test
-/// values. Midpoints where the cutter touches nothing split the profile at edges located by
-/// bisection. The tested midpoints are kept (`mids`) as extra check points for marching.
-pub(crate) fn refine(
-    s: &dyn ClSurface,
-    f: &Raster,
-    v: f64,
-    prof: Profile,
-    eta: f64,
-) -> (Profile, usize, f64) {
-    use rayon::prelude::*;
-    let Profile {
-        mut pts, mut brk, ..
-    } = prof;
-    let mut mids: Vec<Option<f64>> = vec![None; pts.len()];
-    loop {
-        // Midpoints still to drop.
-        let need: Vec<usize> = (0..pts.len().saturating_sub(1))
-            .filter(|&j| !brk[j] && mids[j].is_none() && pts[j + 1].0 - pts[j].0 > MIN_DU_MM)
-            .collect();
-        let dropped: Vec<Option<f64>> = need
-            .par_iter()
-            .map(|&j| z_at(s, f, 0.5 * (pts[j].0 + pts[j + 1].0), v))
-            .collect();
-        let mut gaps = Vec::new();
-        for (&j, z) in need.iter().zip(dropped) {
-            match z {
-                Some(z) => mids[j] = Some(z),
-                None => gaps.push(j),
-            }
-        }
-        let slope = |j: usize| (pts[j + 1].1 - pts[j].1) / (pts[j + 1].0 - pts[j].0);
-        let n = pts.len();
-        let split: Vec<bool> = (0..n.saturating_sub(1))
-            .map(|j| {
-                let Some(zm) = mids[j] else { return false };
-                let len = pts[j + 1].0 - pts[j].0;
-                if len <= MIN_DU_MM {
-                    return false;
-                }
-                if (0.5 * (pts[j].1 + pts[j + 1].1) - zm).abs() > eta / 2.0 {
-                    return true;
-                }
-                let sj = slope(j);
-                let left = if j > 0 && !brk[j - 1] {
-                    (sj - slope(j - 1)).abs()
-                } else {
-                    0.0
-                };
-                let right = if j + 2 < n && !brk[j + 1] {
-                    (slope(j + 1) - sj).abs()
-                } else {
-                    0.0
-                };
-                len * left.max(right) > eta
-            })
-            .collect();
-        if gaps.is_empty() && !split.iter().any(|&b| b) {
-            break;
-        }
-        // Rebuild with midpoints inserted and gaps cut at their edges.
-        let mut np = Vec::with_capacity(n * 2);
-        let mut nb = Vec::with_capacity(n * 2);
-        let mut nm = Vec::with_capacity(n * 2);
-        let mut gi = 0;
-        for j in 0..n {
-            np.push(pts[j]);
-            if j + 1 == n {
-                nb.push(brk[j]);
-                nm.push(None);
-                break;
-            }
-            if gi < gaps.len() && gaps[gi] == j {
-                gi += 1;
-                let (a, b) = (pts[j], pts[j + 1]);
-                let um = 0.5 * (a.0 + b.0);
-                let e0 = edge(s, f, v, (a.0, Some(a.1)), (um, None));
-                let e1 = edge(s, f, v, (b.0, Some(b.1)), (um, None));
-                if e0.0 > a.0 {
-                    nb.push(false);
-                    nm.push(None);
-                    np.push(e0);
-                }
-                nb.push(true);
-                nm.push(None);
-                if e1.0 < b.0 {
-                    np.push(e1);
-                    nb.push(false);
-                    nm.push(None);
-                }
-            } else if split[j] {
-                let um = 0.5 * (pts[j].0 + pts[j + 1].0);
-                nb.push(false);
-                nm.push(None);
-                np.push((um, mids[j].expect("split pairs have a midpoint")));
-                nb.push(false);
-                nm.push(None);
-            } else {
-                nb.push(brk[j]);
-                nm.push(mids[j]);
-            }
-        }
-        pts = np;
-        brk = nb;
-        mids = nm;
-    }
-    // Count pairs left failing at the minimum length.
-    let mut unresolved = 0;
-    let mut worst = 0.0f64;
-    for j in 0..pts.len().saturating_sub(1) {
-        if brk[j] || pts[j + 1].0 - pts[j].0 > MIN_DU_MM {
-            continue;
-        }
-        let dz = (pts[j + 1].1 - pts[j].1).abs();
-        if dz > eta {
-            unresolved += 1;
-            worst = worst.max(dz);
-        }
-    }
-    (Profile { pts, brk, mids }, unresolved, worst)
+fn xy(f: &Raster, u: f64, v: f64) -> (f64, f64) {
+    f.to_xy(u, v)
 }
 
-fn z_at(s: &dyn ClSurface, f: &Raster, u: f64, v: f64) -> Option<f64> {
-    let (x, y) = f.to_xy(u, v);
-    s.z_tip(x, y).filter(|z| z.is_finite())
+fn sample_at(s: &dyn ClSurface, f: &Raster, u: f64, v: f64, hints: &[DVec3]) -> Option<ClSample> {
+    let (x, y) = xy(f, u, v);
+    s.sample(x, y, hints).filter(|c| c.z.is_finite())
 }
 
-/// Bisects between `a` (where `ha` says whether the surface is hit) and `b` (the opposite) for
-/// the edge; returns the hit-side point nearest the edge.
+fn hints_of(a: &ClSample, b: Option<&ClSample>) -> Vec<DVec3> {
+    a.cc.into_iter().chain(b.and_then(|b| b.cc)).collect()
+}
+
+/// Bisects between `a` (hit) and `b` (miss) for the edge of the touched region; returns the
+/// hit sample nearest the edge and the drops spent.
 fn edge(
     s: &dyn ClSurface,
     f: &Raster,
     v: f64,
-    mut a: (f64, Option<f64>),
-    mut b: (f64, Option<f64>),
-) -> (f64, f64) {
-    debug_assert!(a.1.is_some() != b.1.is_some());
-    while (b.0 - a.0).abs() > EDGE_TOL_MM {
-        let m = 0.5 * (a.0 + b.0);
-        let zm = z_at(s, f, m, v);
-        if zm.is_some() == a.1.is_some() {
-            a = (m, zm);
-        } else {
-            b = (m, zm);
+    a: (f64, ClSample),
+    b: f64,
+    drops: &mut usize,
+) -> (f64, ClSample) {
+    let (mut ua, mut ca) = a;
+    let mut ub = b;
+    while (ub - ua).abs() > EDGE_TOL_MM {
+        let m = 0.5 * (ua + ub);
+        *drops += 1;
+        match sample_at(s, f, m, v, &hints_of(&ca, None)) {
+            Some(c) => {
+                ua = m;
+                ca = c;
+            }
+            None => ub = m,
         }
     }
-    let hit = if a.1.is_some() { a } else { b };
-    (hit.0, hit.1.unwrap_or(f64::NAN))
+    (ua, ca)
 }
 
-/// The exact profile of the pass at `v` over `[u_lo, u_hi]`, from the caller's `samples` and
-/// a grid of spacing ≤ `c`. Edges of the touched region are located to [`EDGE_TOL_MM`].
+/// The exact profile of the pass at `v` over `[u_lo, u_hi]`, from the caller's `samples`
+/// and a grid of spacing at most `initial`, refined until every gap is classified (see the
+/// module docs). Edges of the touched region are located to [`EDGE_TOL_MM`].
 pub(crate) fn profile(
     s: &dyn ClSurface,
     f: &Raster,
     v: f64,
     (u_lo, u_hi): (f64, f64),
     samples: &[f64],
-    c: f64,
+    initial: f64,
+    chk: &Check,
 ) -> Profile {
-    use rayon::prelude::*;
-    let n = (((u_hi - u_lo) / c).ceil() as usize).max(1);
+    let n = (((u_hi - u_lo) / initial).ceil() as usize).max(1);
     let mut us: Vec<f64> = (0..=n)
         .map(|k| u_lo + (u_hi - u_lo) * k as f64 / n as f64)
         .collect();
@@ -245,76 +209,428 @@ pub(crate) fn profile(
     );
     us.sort_by(f64::total_cmp);
     us.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-    let zs: Vec<Option<f64>> = us.par_iter().map(|&u| z_at(s, f, u, v)).collect();
-    let mut p = Profile::default();
+    let pts_xy: Vec<(f64, f64)> = us.iter().map(|&u| xy(f, u, v)).collect();
+    let zs = s.samples(&pts_xy);
+    let mut p = Profile {
+        drops: us.len(),
+        ..Profile::default()
+    };
+    let mut drops = 0;
     for k in 0..us.len() {
-        match zs[k] {
-            Some(z) => {
-                if k > 0 && zs[k - 1].is_none() {
-                    let e = edge(s, f, v, (us[k], zs[k]), (us[k - 1], None));
-                    if e.0 < us[k] {
-                        push(&mut p, e, true);
-                    } else {
-                        mark_break(&mut p);
+        match zs[k].filter(|c| c.z.is_finite()) {
+            Some(c) => {
+                if k > 0 && zs[k - 1].is_none_or(|c| !c.z.is_finite()) {
+                    let (eu, ec) = edge(s, f, v, (us[k], c), us[k - 1], &mut drops);
+                    if let Some(g) = p.gaps.last_mut() {
+                        *g = Gap::Break;
+                    }
+                    if eu < us[k] {
+                        p.push(eu, ec, Gap::Pending);
                     }
                 }
-                push(&mut p, (us[k], z), false);
+                p.push(us[k], c, Gap::Pending);
             }
             None => {
-                if k > 0 && zs[k - 1].is_some() {
-                    let e = edge(s, f, v, (us[k - 1], zs[k - 1]), (us[k], None));
-                    if e.0 > us[k - 1] {
-                        push(&mut p, e, false);
+                if k > 0
+                    && let Some(prev) = zs[k - 1].filter(|c| c.z.is_finite())
+                {
+                    let (eu, ec) = edge(s, f, v, (us[k - 1], prev), us[k], &mut drops);
+                    if eu > us[k - 1] {
+                        p.push(eu, ec, Gap::Pending);
                     }
-                    mark_break(&mut p);
+                    if let Some(g) = p.gaps.last_mut() {
+                        *g = Gap::Break;
+                    }
                 }
             }
         }
     }
-    if let Some(b) = p.brk.last_mut() {
-        *b = true;
+    if let Some(g) = p.gaps.last_mut() {
+        *g = Gap::Break;
+    }
+    p.drops += drops;
+    refine(s, f, v, p, chk)
+}
+
+impl Profile {
+    fn push(&mut self, u: f64, c: ClSample, gap: Gap) {
+        self.pts.push((u, c.z));
+        self.cert.push(c);
+        self.gaps.push(gap);
+    }
+}
+
+/// What a round decides for one pending gap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Action {
+    Done(Gap),
+    /// Split at `u` (mm).
+    Split(f64),
+    /// Drop the midpoint, then test it (sampled path).
+    Test,
+}
+
+/// Where the contact pieces of samples `a` and `b` cross between them (mm along `u`): at a
+/// crease of the CL surface (two pieces meeting in a V) this is the crease, and a sample
+/// there certifies both halves (each then has a piece equal to its end's z at both ends).
+/// Found by bisection on the pieces alone (no drops); `None` without two distinct pieces
+/// reaching across the gap.
+fn crease_at(
+    s: &dyn ClSurface,
+    f: &Raster,
+    v: f64,
+    (ua, ca): (f64, &ClSample),
+    (ub, cb): (f64, &ClSample),
+) -> Option<f64> {
+    let (pa, pb) = (ca.piece?, cb.piece?);
+    if pa == pb {
+        return None;
+    }
+    // g(u) = f_a(u) − f_b(u): > 0 at u_a (f_a = z_a ≥ f_b), < 0 at u_b.
+    let g = |u: f64| {
+        let (x, y) = xy(f, u, v);
+        Some(s.piece_z(pa, x, y)? - s.piece_z(pb, x, y)?)
+    };
+    let (mut lo, mut hi) = (ua, ub);
+    if !(g(lo)? > 0.0 && g(hi)? < 0.0) {
+        return None;
+    }
+    for _ in 0..60 {
+        let m = 0.5 * (lo + hi);
+        match g(m) {
+            Some(gm) if gm > 0.0 => lo = m,
+            Some(_) => hi = m,
+            None => return None,
+        }
+        if hi - lo <= 1e-12 * (1.0 + ua.abs()) {
+            break;
+        }
+    }
+    let m = 0.5 * (lo + hi);
+    (m > ua && m < ub).then_some(m)
+}
+
+/// Certified dip (mm) of the CL surface below the chord of samples `a` and `b`: with the
+/// concave contact pieces `f_a`, `f_b` (lower bounds of the surface, `f_a(u_a) = z_a`),
+/// `chord − max(f_a, f_b)` is at most `G_a·G_b / (G_a + G_b)`, `G_a = z_b − f_a(u_b)`,
+/// `G_b = z_a − f_b(u_a)`. `None` when a piece is unknown or out of reach at both ends.
+fn dip_bound(
+    s: &dyn ClSurface,
+    f: &Raster,
+    v: f64,
+    (ua, ca): (f64, &ClSample),
+    (ub, cb): (f64, &ClSample),
+) -> Option<f64> {
+    let (pa, pb) = (ca.piece?, cb.piece?);
+    if pa == pb {
+        return Some(0.0);
+    }
+    let at = |piece: u32, u: f64| {
+        let (x, y) = xy(f, u, v);
+        s.piece_z(piece, x, y)
+    };
+    let ga = at(pa, ub).map_or(f64::INFINITY, |z| cb.z - z);
+    let gb = at(pb, ua).map_or(f64::INFINITY, |z| ca.z - z);
+    if ga <= 0.0 || gb <= 0.0 {
+        return Some(0.0);
+    }
+    match (ga.is_finite(), gb.is_finite()) {
+        (true, true) => Some(ga * gb / (ga + gb)),
+        (true, false) => Some(ga),
+        (false, true) => Some(gb),
+        (false, false) => None,
+    }
+}
+
+fn same_plane(a: Option<(DVec3, f64)>, b: Option<(DVec3, f64)>) -> Option<(DVec3, f64)> {
+    let ((na, da), (nb, db)) = (a?, b?);
+    ((na - nb).length() <= 1e-12 && (da - db).abs() <= COPLANAR_MM).then_some((na, da))
+}
+
+/// Classifies one pending gap (without its midpoint).
+fn classify(s: &dyn ClSurface, f: &Raster, v: f64, p: &Profile, j: usize, chk: &Check) -> Action {
+    let ((ua, za), (ub, zb)) = (p.pts[j], p.pts[j + 1]);
+    let (ca, cb) = (&p.cert[j], &p.cert[j + 1]);
+    let du = ub - ua;
+    if let Some((n, d)) = same_plane(ca.plane, cb.plane)
+        && let Some(b) = s.plane_bound(xy(f, ua, v), xy(f, ub, v), n, d, chk.rise_budget)
+        && b.covered
+    {
+        return Action::Done(Gap::Planar {
+            rise: b.rise_mm,
+            nz: n.z,
+        });
+    }
+    let tiny = du <= MIN_DU_MM;
+    let mid = 0.5 * (ua + ub);
+    if chk.corner > 0.0 {
+        let l3 = (du * du + (zb - za) * (zb - za)).sqrt();
+        if l3 > chk.spacing {
+            return if tiny {
+                Action::Done(Gap::Unresolved {
+                    dz: (zb - za).abs(),
+                })
+            } else {
+                Action::Split(mid)
+            };
+        }
+        match dip_bound(s, f, v, (ua, ca), (ub, cb)) {
+            Some(dip) if dip <= chk.dip_budget => Action::Done(Gap::Open {
+                dip: Some(dip),
+                mid: None,
+            }),
+            Some(_) if !tiny => {
+                // Split where the pieces cross (a crease), unless that is too close to an
+                // end to halve the gap's doubt.
+                let at = crease_at(s, f, v, (ua, ca), (ub, cb))
+                    .filter(|&u| u - ua > MIN_DU_MM && ub - u > MIN_DU_MM)
+                    .unwrap_or(mid);
+                Action::Split(at)
+            }
+            // No certificate for the excess: test the midpoint.
+            _ if !tiny => Action::Test,
+            _ => Action::Done(Gap::Open {
+                dip: Some((zb - za).abs()),
+                mid: None,
+            }),
+        }
+    } else if tiny {
+        if (zb - za).abs() <= chk.eta {
+            Action::Done(Gap::Open {
+                dip: None,
+                mid: None,
+            })
+        } else {
+            Action::Done(Gap::Unresolved {
+                dz: (zb - za).abs(),
+            })
+        }
+    } else if du > chk.spacing {
+        Action::Split(mid)
+    } else {
+        Action::Test
+    }
+}
+
+/// The sampled path's tests on gap `j` with its midpoint z `zm`: the midpoint within η/2 of
+/// the chord, and no slope jump to a joinable neighbour larger than η over the gap.
+fn midpoint_ok(p: &Profile, j: usize, zm: f64, chk: &Check) -> bool {
+    let ((ua, za), (ub, zb)) = (p.pts[j], p.pts[j + 1]);
+    if (0.5 * (za + zb) - zm).abs() > chk.eta / 2.0 {
+        return false;
+    }
+    // A crease of the CL section near the gap shows as a slope jump even when a curved
+    // stretch makes the midpoint fit by cancellation.
+    let slope = |k: usize| (p.pts[k + 1].1 - p.pts[k].1) / (p.pts[k + 1].0 - p.pts[k].0);
+    let sj = slope(j);
+    let joinable = |k: usize| !matches!(p.gaps[k], Gap::Break);
+    let left = if j > 0 && joinable(j - 1) {
+        (sj - slope(j - 1)).abs()
+    } else {
+        0.0
+    };
+    let right = if j + 2 < p.pts.len() && joinable(j + 1) {
+        (slope(j + 1) - sj).abs()
+    } else {
+        0.0
+    };
+    (ub - ua) * left.max(right) <= chk.eta
+}
+
+/// Refines a profile until every gap is classified.
+fn refine(s: &dyn ClSurface, f: &Raster, v: f64, mut p: Profile, chk: &Check) -> Profile {
+    use rayon::prelude::*;
+    loop {
+        let pending: Vec<usize> = (0..p.gaps.len())
+            .filter(|&j| p.gaps[j] == Gap::Pending)
+            .collect();
+        if pending.is_empty() {
+            break;
+        }
+        let actions: Vec<Action> = pending
+            .par_iter()
+            .map(|&j| classify(s, f, v, &p, j, chk))
+            .collect();
+        // Midpoints to drop: splits and tests.
+        let want: Vec<usize> = pending
+            .iter()
+            .zip(&actions)
+            .filter(|(_, a)| !matches!(a, Action::Done(_)))
+            .map(|(&j, _)| j)
+            .collect();
+        let at: Vec<f64> = pending
+            .iter()
+            .zip(&actions)
+            .filter_map(|(&j, a)| match *a {
+                Action::Done(_) => None,
+                Action::Split(u) => Some(u),
+                Action::Test => Some(0.5 * (p.pts[j].0 + p.pts[j + 1].0)),
+            })
+            .collect();
+        let mids: Vec<Option<ClSample>> = want
+            .par_iter()
+            .zip(&at)
+            .map(|(&j, &um)| sample_at(s, f, um, v, &hints_of(&p.cert[j], Some(&p.cert[j + 1]))))
+            .collect();
+        p.drops += want.len();
+        // Decide, then rebuild with the inserted samples.
+        // Gap index, split point, sample there.
+        let mut insert: Vec<(usize, f64, Option<ClSample>)> = Vec::new();
+        let mut wi = 0;
+        for (&j, a) in pending.iter().zip(&actions) {
+            match *a {
+                Action::Done(g) => p.gaps[j] = g,
+                Action::Split(u) => {
+                    insert.push((j, u, mids[wi]));
+                    wi += 1;
+                }
+                Action::Test => {
+                    let m = mids[wi];
+                    wi += 1;
+                    match m {
+                        Some(c) if midpoint_ok(&p, j, c.z, chk) => {
+                            p.gaps[j] = Gap::Open {
+                                dip: None,
+                                mid: Some(c.z),
+                            }
+                        }
+                        _ => insert.push((j, at[wi - 1], m)),
+                    }
+                }
+            }
+        }
+        if insert.is_empty() {
+            continue;
+        }
+        let old = std::mem::take(&mut p);
+        let n = old.pts.len();
+        let mut next = Profile {
+            drops: old.drops,
+            ..Profile::default()
+        };
+        let mut ii = 0;
+        let mut drops = 0;
+        for j in 0..n {
+            next.push(old.pts[j].0, old.cert[j], old.gaps[j]);
+            if ii < insert.len() && insert[ii].0 == j {
+                let (um, m) = (insert[ii].1, insert[ii].2);
+                ii += 1;
+                let (ua, ub) = (old.pts[j].0, old.pts[j + 1].0);
+                match m {
+                    Some(c) => {
+                        // Both halves pending.
+                        if let Some(g) = next.gaps.last_mut() {
+                            *g = Gap::Pending;
+                        }
+                        next.push(um, c, Gap::Pending);
+                    }
+                    None => {
+                        // The cutter leaves the part in between: cut at both edges.
+                        let (e0u, e0) = edge(s, f, v, (ua, old.cert[j]), um, &mut drops);
+                        let (e1u, e1) = edge(s, f, v, (ub, old.cert[j + 1]), um, &mut drops);
+                        if let Some(g) = next.gaps.last_mut() {
+                            *g = if e0u > ua { Gap::Pending } else { Gap::Break };
+                        }
+                        if e0u > ua {
+                            next.push(e0u, e0, Gap::Break);
+                        }
+                        if e1u < ub {
+                            next.push(e1u, e1, Gap::Pending);
+                        }
+                    }
+                }
+            }
+        }
+        next.drops += drops;
+        p = next;
     }
     p
 }
 
-fn push(p: &mut Profile, pt: (f64, f64), brk_before: bool) {
-    if brk_before {
-        mark_break(p);
-    }
-    p.pts.push(pt);
-    p.brk.push(false);
-}
-
-fn mark_break(p: &mut Profile) {
-    if let Some(b) = p.brk.last_mut() {
-        *b = true;
-    }
-}
-
-/// Largest vertical deviation (mm) between the chord `i → k` and the profile points strictly
-/// between, and the tested midpoints of every pair it spans.
-fn chord_dev(pts: &[(f64, f64)], mids: &[Option<f64>], i: usize, k: usize) -> f64 {
-    let (ua, za) = pts[i];
-    let (ub, zb) = pts[k];
-    let du = ub - ua;
-    let line = |u: f64| za + (zb - za) * (u - ua) / du;
-    let at_pts = pts[i + 1..k]
-        .iter()
-        .map(|&(u, z)| (line(u) - z).abs())
-        .fold(0.0, f64::max);
-    let at_mids = (i..k)
-        .filter_map(|j| {
-            mids.get(j)
-                .copied()
-                .flatten()
-                .map(|z| (line(0.5 * (pts[j].0 + pts[j + 1].0)) - z).abs())
-        })
-        .fold(0.0, f64::max);
-    at_pts.max(at_mids)
-}
-
 fn len3(a: (f64, f64), b: (f64, f64)) -> f64 {
     ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt()
+}
+
+/// The bound a move `i → k` gets from the gaps it spans: `Some((bound, sampled))` where
+/// `bound` is the largest penetration (normal, mm) or vertical excess (mm) it proves and
+/// `sampled` says whether the sampled path was used; `None` if the move fails.
+pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option<(f64, bool)> {
+    let (ua, za) = p.pts[i];
+    let (ub, zb) = p.pts[k];
+    let du = ub - ua;
+    if len3(p.pts[i], p.pts[k]) > chk.max_step && k > i + 1 {
+        return None;
+    }
+    let slope = (zb - za) / du;
+    let chord = |u: f64| za + slope * (u - ua);
+    let stretch = (1.0 + slope * slope).sqrt();
+    let r = chk.corner;
+    let mut worst = 0.0f64;
+    let mut sampled = false;
+    for j in i..k {
+        let ((u0, z0), (u1, z1)) = (p.pts[j], p.pts[j + 1]);
+        let (d0, d1) = (z0 - chord(u0), z1 - chord(u1)); // + : CL above the move (gouge side)
+        let up = d0.max(d1).max(0.0);
+        let down = (-d0).max(-d1).max(0.0);
+        match p.gaps[j] {
+            Gap::Break | Gap::Pending => return None,
+            Gap::Unresolved { .. } => {
+                if k != i + 1 {
+                    return None;
+                }
+            }
+            Gap::Planar { rise, nz } => {
+                let pen = up * nz + rise;
+                let exc = down + COPLANAR_MM / nz;
+                if pen > chk.tau || exc > chk.tau {
+                    return None;
+                }
+                worst = worst.max(pen).max(exc);
+            }
+            Gap::Open { dip, mid } => {
+                let mid_dev = mid.map(|zm| zm - chord(0.5 * (u0 + u1)));
+                // Gouge side.
+                if r > 0.0 {
+                    let l = (u1 - u0) * stretch;
+                    let q = (r - up) * (r - up) - l * l / 4.0;
+                    if up >= r || q < 0.0 {
+                        return None;
+                    }
+                    let pen = r - q.sqrt();
+                    if pen > chk.tau {
+                        return None;
+                    }
+                    worst = worst.max(pen);
+                } else {
+                    sampled = true;
+                    let g = up.max(mid_dev.unwrap_or(0.0));
+                    if g > chk.accept {
+                        return None;
+                    }
+                    worst = worst.max(g);
+                }
+                // Excess side.
+                match dip {
+                    Some(dip) => {
+                        let exc = down + dip;
+                        if exc > chk.tau {
+                            return None;
+                        }
+                        worst = worst.max(exc);
+                    }
+                    None => {
+                        sampled = true;
+                        let e = down.max(mid_dev.map_or(0.0, |m| -m));
+                        if e > chk.accept {
+                            return None;
+                        }
+                        worst = worst.max(e);
+                    }
+                }
+            }
+        }
+    }
+    Some((worst, sampled))
 }
 
 /// Eq. 1 of the seed: δ = 2·sqrt(2τ|ρ| − τ²) with ρ the CL section's radius of curvature
@@ -347,8 +663,8 @@ fn eq1_step(pts: &[(f64, f64)], i: usize, end: usize, chk: &Check) -> f64 {
 }
 
 /// Marches a refined profile (see the module docs).
-pub(crate) fn march(prof: Profile, chk: &Check) -> Marched {
-    let Profile { pts, brk, mids } = prof;
+pub(crate) fn march(p: &Profile, chk: &Check) -> Marched {
+    let pts = &p.pts;
     let mut out = Marched::default();
     if pts.is_empty() {
         return out;
@@ -356,19 +672,23 @@ pub(crate) fn march(prof: Profile, chk: &Check) -> Marched {
     let mut run = vec![pts[0]];
     let mut i = 0;
     while i + 1 < pts.len() {
-        if brk[i] {
-            out.runs.push(std::mem::take(&mut run));
+        if p.gaps[i] == Gap::Break {
+            if run.len() >= 2 {
+                out.runs.push(std::mem::take(&mut run));
+            } else {
+                run.clear();
+            }
             i += 1;
             run.push(pts[i]);
             continue;
         }
         // Last index reachable without crossing a break.
-        let end = (i..pts.len()).find(|&j| brk[j]).unwrap_or(pts.len() - 1);
-        let ok = |k: usize| {
-            len3(pts[i], pts[k]) <= chk.max_step && chord_dev(&pts, &mids, i, k) <= chk.accept
-        };
-        // Initial guess from Eq. 1, then gallop up / bisect down to a locally longest chord.
-        let delta = eq1_step(&pts, i, end, chk);
+        let end = (i..pts.len())
+            .find(|&j| p.gaps[j] == Gap::Break)
+            .unwrap_or(pts.len() - 1);
+        let ok = |k: usize| move_bound(p, i, k, chk).is_some();
+        // Initial guess from Eq. 1, then gallop up / bisect down to a locally longest move.
+        let delta = eq1_step(pts, i, end, chk);
         let mut acc = 0.0;
         let mut k0 = end;
         for j in i + 1..=end {
@@ -405,15 +725,29 @@ pub(crate) fn march(prof: Profile, chk: &Check) -> Marched {
                 hi = mid;
             }
         }
-        let dev = if lo > i + 1 {
-            chord_dev(&pts, &mids, i, lo)
-        } else {
-            0.0
-        };
-        out.max_dev = out.max_dev.max(dev);
+        match move_bound(p, i, lo, chk) {
+            Some((b, sampled)) => {
+                out.max_dev = out.max_dev.max(b);
+                out.sampled_moves += usize::from(sampled);
+            }
+            None => {
+                // A single gap that its own bounds do not prove (unresolved wall, or a
+                // lemma gap too steep to fit): joined and counted.
+                out.unresolved += 1;
+                out.unresolved_dev = out.unresolved_dev.max((pts[lo].1 - pts[i].1).abs());
+            }
+        }
+        if let Gap::Unresolved { dz } = p.gaps[i]
+            && lo == i + 1
+        {
+            out.unresolved += 1;
+            out.unresolved_dev = out.unresolved_dev.max(dz);
+        }
         i = lo;
         run.push(pts[i]);
     }
-    out.runs.push(run);
+    if run.len() >= 2 {
+        out.runs.push(run);
+    }
     out
 }

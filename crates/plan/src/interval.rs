@@ -2,14 +2,175 @@
 //! verified in CL space and shrunk until the verified scallop is at most h.
 
 use crate::config::PlanConfig;
+use crate::feed::{Gap, Profile};
 use crate::frame::Raster;
 use crate::{ClSurface, sidestep};
 
-/// Model evaluation at one profile point `(u, z0)` of the pass at `v`: the XY interval, and
-/// the `(ρ_cl, θ)` pairs it came from. The slope θ is that of the chord to the CL point at
-/// the interval on the next pass (the seed's Algorithm 2), found by fixed-point iteration, and
-/// never less than the steepest chord over `[v − w₀/2, v + w₀]`'s first half; ρ_cl is the
-/// signed circumradius of the CL section through `v − δ, v, v + δ` and `v, v + δ, v + 2δ`.
+/// Besides every sample of both passes, the side-step model is evaluated at points this far
+/// apart (mm) along the pass, so passes with few samples (planar stretches) are covered.
+pub const EVAL_SPACING_MM: f64 = 1.0;
+
+/// A concave circle through three passes whose radius is below this many pass spacings may
+/// be a crease of the CL surface; the scallop there is measured (see [`needed`]). Through
+/// three points spaced d across a kink sharper than about 25°, the circle's radius is 2d–10d
+/// depending on where the kink falls.
+pub const CREASE_SPACINGS: f64 = 10.0;
+
+/// The side-step model evaluated between two passes.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Need {
+    /// The largest XY interval (mm) the model allows at every evaluation point.
+    pub interval: f64,
+    /// Evaluation points where it fell below `floor`.
+    pub steep: usize,
+    /// Evaluation points on a suspected concave CL crease, where the scallop was measured
+    /// (see [`needed`]).
+    pub creases: usize,
+    /// Largest scallop (mm) measured there at the interval evaluated.
+    pub crease_scallop: f64,
+    /// Drops spent measuring.
+    pub drops: usize,
+    /// The `(ρ_cl, θ)` of every evaluation point.
+    pub evals: Vec<(f64, f64)>,
+}
+
+impl Profile {
+    /// The profile's z (mm) at `u`, linear between samples; `None` outside it or across a
+    /// break.
+    pub(crate) fn z_at(&self, u: f64) -> Option<f64> {
+        let pts = &self.pts;
+        let (first, last) = (pts.first()?, pts.last()?);
+        if !(u >= first.0 && u <= last.0) {
+            return None;
+        }
+        let j = pts.partition_point(|p| p.0 <= u).saturating_sub(1);
+        if pts[j].0 == u {
+            return Some(pts[j].1);
+        }
+        if j + 1 >= pts.len() || self.gaps[j] == Gap::Break {
+            return None;
+        }
+        let ((u0, z0), (u1, z1)) = (pts[j], pts[j + 1]);
+        Some(z0 + (z1 - z0) * (u - u0) / (u1 - u0))
+    }
+}
+
+/// The side-step model between the pass `cur` and the pass `next` `dv` mm further along `v`
+/// (the seed's Algorithm 2): at every sample of both passes and every
+/// [`EVAL_SPACING_MM`] along `cur`, θ is the slope of the chord from `cur` to `next` across
+/// the passes and ρ_cl the signed radius of the circle through the pass `behind` (`dvb` mm
+/// back), `cur` and `next` (straight where there is no pass behind). The interval is the
+/// minimum over those points; `floor` only counts the points below it.
+///
+/// Where that circle is concave and tighter than [`CREASE_SPACINGS`] pass spacings, it may
+/// be a crease of the CL surface (the cutter bridging a part corner) rather than a curvature
+/// the passes resolve — its radius would shrink with the spacing and drive the step to zero.
+/// There the scallop is measured instead of modelled: the CL surface is dropped at a quarter,
+/// half and three quarters of the interval and the scallop taken as the straight-section
+/// cusp for the chord plus the CL's largest dip below the chord (normal to it): to second
+/// order this is the re-derived Eq. 2 on a concave section, and at a crease it is the
+/// material the two passes leave above the cutter standing in the corner.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn needed(
+    s: &dyn ClSurface,
+    f: &Raster,
+    v: f64,
+    model: &sidestep::SideStepModel,
+    behind: Option<(&Profile, f64)>,
+    cur: &Profile,
+    next: &Profile,
+    dv: f64,
+    floor: f64,
+) -> Need {
+    let mut us: Vec<f64> = cur.pts.iter().chain(next.pts.iter()).map(|p| p.0).collect();
+    if let (Some(a), Some(b)) = (cur.pts.first(), cur.pts.last()) {
+        let n = ((b.0 - a.0) / EVAL_SPACING_MM).ceil() as usize;
+        us.extend((1..n).map(|k| a.0 + (b.0 - a.0) * k as f64 / n as f64));
+    }
+    us.sort_by(f64::total_cmp);
+    us.dedup();
+    let h = model.scallop();
+    let mut need = Need {
+        interval: f64::INFINITY,
+        ..Need::default()
+    };
+    let mut creases: Vec<(f64, f64, f64, f64)> = Vec::new(); // u, z, z1, θ
+    for u in us {
+        let (Some(z), Some(z1)) = (cur.z_at(u), next.z_at(u)) else {
+            continue;
+        };
+        let theta = ((z1 - z) / dv).abs().atan();
+        let mut rho = behind
+            .and_then(|(b, dvb)| b.z_at(u).map(|z0| (dvb, z0)))
+            .map_or(f64::INFINITY, |(dvb, z0)| {
+                sidestep::signed_radius((-dvb, z0), (0.0, z), (dv, z1))
+            });
+        if rho.is_nan() {
+            rho = f64::INFINITY;
+        }
+        let spacing = behind.map_or(dv, |(_, dvb)| dv.max(dvb));
+        if rho < 0.0 && -rho < CREASE_SPACINGS * spacing {
+            creases.push((u, z, z1, theta));
+            continue;
+        }
+        let w = model.xy_interval(rho, theta);
+        if w < floor {
+            need.steep += 1;
+        }
+        need.interval = need.interval.min(w);
+        need.evals.push((rho, theta));
+    }
+    // Suspected creases: measure the dip.
+    need.creases = creases.len();
+    let dips: Vec<Option<f64>> = {
+        use rayon::prelude::*;
+        creases
+            .par_iter()
+            .map(|&(u, z, z1, _)| {
+                let mut dip = 0.0f64;
+                for k in 1..4 {
+                    let t = k as f64 / 4.0;
+                    let (x, y) = f.to_xy(u, v + t * dv);
+                    let zq = s.z_tip(x, y)?;
+                    dip = dip.max(z + t * (z1 - z) - zq);
+                }
+                Some(dip)
+            })
+            .collect()
+    };
+    need.drops += 3 * creases.len();
+    for (&(_, z, z1, theta), dip) in creases.iter().zip(dips) {
+        let Some(dip) = dip else { continue };
+        let w = ((dv * dv) + (z1 - z) * (z1 - z)).sqrt();
+        let re = model.effective_radius(theta);
+        let cusp = if w < 2.0 * re {
+            re - (re * re - w * w / 4.0).sqrt()
+        } else {
+            re
+        };
+        let scallop = cusp + dip * theta.cos();
+        // The interval scaled for this point: linear in the measured scallop (the dip grows
+        // about linearly with the interval at a crease), never above the straight model.
+        let straight = model.xy_interval(f64::INFINITY, theta);
+        let w_need = if scallop > 0.0 {
+            (dv * h / scallop).min(straight)
+        } else {
+            straight
+        };
+        if w_need < floor {
+            need.steep += 1;
+        }
+        need.interval = need.interval.min(w_need);
+        need.evals.push((f64::INFINITY, theta));
+        need.crease_scallop = need.crease_scallop.max(scallop);
+    }
+    if !need.interval.is_finite() {
+        need.interval = model.xy_interval(f64::INFINITY, 0.0);
+    }
+    need
+}
+
+#[cfg(test)]
 pub(crate) fn model_at(
     s: &dyn ClSurface,
     f: &Raster,
@@ -66,7 +227,7 @@ pub(crate) fn model_at(
 }
 
 /// Number of CL samples across the interval for the CL-space verification.
-const VERIFY_Q: usize = 32;
+pub(crate) const VERIFY_Q: usize = 32;
 
 /// Scallop (mm) left between the passes at `v` and `v + dv` in the cross-section `u`,
 /// computed from the CL surface alone: the best surface the cutter can leave there is

@@ -43,6 +43,8 @@ mod plan;
 mod scallop;
 pub mod sidestep;
 
+use cam_core::DVec3;
+
 pub use config::{Direction, Milling, PlanConfig, PlanError};
 pub use frame::Raster;
 #[cfg(feature = "mesh")]
@@ -52,17 +54,150 @@ pub use plan::{
 };
 pub use scallop::{ScallopProbe, ScallopReport, measure_scallop};
 
+/// An exact sample of the CL surface, with what the surface can certify about its
+/// neighbourhood.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClSample {
+    /// Tool-tip z (mm).
+    pub z: f64,
+    /// A piece of the surface through this sample ([`ClSurface::piece_z`]): a lower bound of
+    /// the CL surface everywhere, concave along straight lines, equal to `z` here. For a mesh,
+    /// the triangle carrying the contact.
+    pub piece: Option<u32>,
+    /// The cutter-contact point on the part (mm), a pruning hint for nearby queries.
+    pub cc: Option<DVec3>,
+    /// The plane the cutter rests on here, if it rests on a facet: upward unit normal `n`
+    /// and offset `d` of `{p : n·p = d}` (mm).
+    pub plane: Option<(DVec3, f64)>,
+}
+
+impl ClSample {
+    /// A sample with no certificate.
+    pub fn bare(z: f64) -> ClSample {
+        ClSample {
+            z,
+            piece: None,
+            cc: None,
+            plane: None,
+        }
+    }
+}
+
+/// What a surface proved about the CL surface along a segment over a plane (see
+/// [`ClSurface::plane_bound`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlaneBound {
+    /// Largest height (mm, along the plane normal) by which material within the cutter's
+    /// reach rises above the plane.
+    pub rise_mm: f64,
+    /// Coplanar facets carry the contact along the whole segment.
+    pub covered: bool,
+}
+
 /// The exact tool-tip height of the cutter resting on the part: the CL surface.
+///
+/// Only [`ClSurface::z_tip`] is required. Surfaces that can also certify their neighbourhood
+/// (the drop-cutter of a mesh) let the planner prove its tolerance between samples instead of
+/// testing it by sampling; see `docs/plan-math.md` §1.
 pub trait ClSurface: Sync {
     /// Tool-tip z (mm) of the cutter (axis +Z) resting on the part at `(x, y)` (mm), `None`
     /// where the cutter touches nothing.
     fn z_tip(&self, x: f64, y: f64) -> Option<f64>;
+
+    /// The exact sample at `(x, y)`; `hints` are contact points of nearby samples (they may
+    /// speed the query up, never change it).
+    fn sample(&self, x: f64, y: f64, hints: &[DVec3]) -> Option<ClSample> {
+        let _ = hints;
+        self.z_tip(x, y).map(ClSample::bare)
+    }
+
+    /// Exact samples at every point, in order (points along a line: neighbours may share
+    /// work). Identical to [`ClSurface::sample`] point by point.
+    fn samples(&self, xy: &[(f64, f64)]) -> Vec<Option<ClSample>> {
+        use rayon::prelude::*;
+        xy.par_iter()
+            .map(|&(x, y)| self.sample(x, y, &[]))
+            .collect()
+    }
+
+    /// The value (mm) at `(x, y)` of the piece `piece` of a sample ([`ClSample::piece`]),
+    /// `None` where the piece does not reach.
+    fn piece_z(&self, piece: u32, x: f64, y: f64) -> Option<f64> {
+        let _ = (piece, x, y);
+        None
+    }
+
+    /// For the cutter moving in XY from `a` to `b` over the plane `n·p = d`: the largest
+    /// rise of material within reach above the plane and whether coplanar facets carry the
+    /// contact; `None` if the rise exceeds `max_rise_mm` or the surface cannot tell.
+    fn plane_bound(
+        &self,
+        a: (f64, f64),
+        b: (f64, f64),
+        n: DVec3,
+        d: f64,
+        max_rise_mm: f64,
+    ) -> Option<PlaneBound> {
+        let _ = (a, b, n, d, max_rise_mm);
+        None
+    }
 }
 
 #[cfg(feature = "mesh")]
 impl ClSurface for cam_offset::DropCutter {
     fn z_tip(&self, x: f64, y: f64) -> Option<f64> {
         self.drop(x, y)
+    }
+
+    fn sample(&self, x: f64, y: f64, hints: &[DVec3]) -> Option<ClSample> {
+        self.contact_hinted(x, y, hints).map(|c| self.to_sample(c))
+    }
+
+    fn samples(&self, xy: &[(f64, f64)]) -> Vec<Option<ClSample>> {
+        self.contact_points(xy)
+            .into_iter()
+            .map(|c| c.map(|c| self.to_sample(c)))
+            .collect()
+    }
+
+    fn piece_z(&self, piece: u32, x: f64, y: f64) -> Option<f64> {
+        self.triangle_drop(piece, x, y)
+    }
+
+    fn plane_bound(
+        &self,
+        a: (f64, f64),
+        b: (f64, f64),
+        n: DVec3,
+        d: f64,
+        max_rise_mm: f64,
+    ) -> Option<PlaneBound> {
+        self.plane_certificate(a, b, n, d, max_rise_mm)
+            .map(|c| PlaneBound {
+                rise_mm: c.rise_mm,
+                covered: c.covered,
+            })
+    }
+}
+
+#[cfg(feature = "mesh")]
+trait ToSample {
+    fn to_sample(&self, c: cam_offset::Contact) -> ClSample;
+}
+
+#[cfg(feature = "mesh")]
+impl ToSample for cam_offset::DropCutter {
+    fn to_sample(&self, c: cam_offset::Contact) -> ClSample {
+        let plane = (c.kind == cam_offset::ContactKind::Facet)
+            .then(|| self.triangle_normal(c.triangle))
+            .flatten()
+            .map(|n| (n, n.dot(c.cc)));
+        ClSample {
+            z: c.z_tip,
+            piece: Some(c.triangle),
+            cc: Some(c.cc),
+            plane,
+        }
     }
 }
 

@@ -50,8 +50,8 @@ impl PassSampler for SectionSampler {
     }
 }
 
-/// Plans finishing passes over a mesh: sections and constant-arc-length samples at the check
-/// spacing, the exact drop-cutter CL surface, then [`plan`].
+/// Plans finishing passes over a mesh: sections and constant-arc-length samples at
+/// [`PlanConfig::section_step_mm`], the exact drop-cutter CL surface, then [`plan`].
 ///
 /// # Errors
 /// As [`plan`].
@@ -60,8 +60,8 @@ pub fn plan_part(
     cfg: &PlanConfig,
     progress: Option<Progress<'_>>,
 ) -> Result<Plan, PlanError> {
-    let (c, _) = cfg.validate()?;
+    let step = cfg.section_step_mm()?;
     let dc = DropCutter::new(mesh, cfg.cutter);
-    let sampler = SectionSampler::new(mesh, cfg.angle_deg, c, cfg.cutter.radius());
+    let sampler = SectionSampler::new(mesh, cfg.angle_deg, step, cfg.cutter.radius());
     plan(&dc, &sampler, cfg, progress)
 }

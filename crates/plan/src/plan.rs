@@ -14,9 +14,8 @@ use crate::{interval, sidestep};
 /// radius; reached only on CL sections steeper than about 89° across the passes.
 pub const STEEP_FLOOR_FRACTION: f64 = 0.02;
 
-/// Besides every CL point, the side-step model is evaluated at profile points this far apart
-/// (mm), so passes with few CL points (straight along `u`) are still covered.
-pub const EVAL_SPACING_MM: f64 = 1.0;
+/// Candidate next passes the side-step search builds at most per pass.
+const MAX_TRIES: usize = 10;
 
 /// Relative accuracy allowed to the CL-space scallop verification before it shrinks a step
 /// (its sampling of the ideal surface is accurate to about this).
@@ -76,12 +75,12 @@ pub struct Plan {
     pub rapid_length_mm: f64,
     /// Length (mm) of plunge and retract moves.
     pub plunge_retract_length_mm: f64,
-    /// Largest vertical deviation (mm) between a cut move on a pass and the exact CL surface
-    /// at the refined profile points it spans; ≤ 0.8·τ by construction (the remaining 0.2·τ
-    /// covers the CL surface between profile points, see the crate docs).
+    /// Largest bound (mm) proven for a cut move on a pass: the cutter's penetration into the
+    /// part (normal depth) or the move's vertical excess over the exact CL surface; ≤ τ by
+    /// construction (≤ τ − η at samples for moves on the sampled path).
     pub max_chord_deviation_mm: f64,
-    /// Joins of profile points closer than 1e-5 mm whose check still failed (vertical CL
-    /// walls); their deviation is in [`Plan::unresolved_deviation_mm`], not above.
+    /// Joins of profile samples closer than 1e-5 mm that could not be certified (vertical CL
+    /// walls); their z step is in [`Plan::unresolved_deviation_mm`], not above.
     pub unresolved_joins: usize,
     /// Largest deviation (mm) at unresolved joins (0 when there are none).
     pub unresolved_deviation_mm: f64,
@@ -96,12 +95,18 @@ pub struct Plan {
     pub surface_links: usize,
     /// Retract–rapid–plunge sequences between runs.
     pub retracts: usize,
-    /// Largest spacing of the exact profile points before refinement (mm).
+    /// Largest gap between profile samples (mm): 3-D for ball and bull cutters (the lemma's
+    /// spacing), along the pass for a flat end mill.
     pub check_spacing_mm: f64,
     /// Safe Z used (mm, tool tip).
     pub safe_z_mm: f64,
     /// `v` (mm, raster frame) of every pass that cuts, in machining order.
     pub pass_v_mm: Vec<f64>,
+    /// Exact CL samples (drop-cutter queries) the plan cost.
+    pub drops: usize,
+    /// Cut moves on passes whose bound rests on sampling somewhere (flat end mills, surfaces
+    /// without certificates); every other move's bound is proven (see the crate docs).
+    pub sampled_moves: usize,
 }
 
 /// One pass before marching.
@@ -109,6 +114,13 @@ struct PassPlan {
     v: f64,
     predicted: f64,
     steep: usize,
+}
+
+/// A pass's profile and its marched runs.
+struct Pass {
+    v: f64,
+    prof: Profile,
+    marched: feed::Marched,
 }
 
 /// Plans finishing passes over `surface` (see the crate docs for the guarantees).
@@ -122,19 +134,29 @@ pub fn plan(
     cfg: &PlanConfig,
     progress: Option<Progress<'_>>,
 ) -> Result<Plan, PlanError> {
-    let (c, accept) = cfg.validate()?;
+    // Run on a worker of the thread pool: the passes are sequential, and the many small
+    // parallel batches inside each pass are then cheap to fork instead of being injected
+    // into the pool from outside one by one.
+    rayon::scope(|_| plan_passes(surface, sampler, cfg, progress))
+}
+
+fn plan_passes(
+    surface: &dyn ClSurface,
+    sampler: &dyn PassSampler,
+    cfg: &PlanConfig,
+    progress: Option<Progress<'_>>,
+) -> Result<Plan, PlanError> {
+    let (c, _) = cfg.validate()?;
     let frame = Raster::new(cfg.angle_deg);
     let cutter = cfg.cutter;
     let h = cfg.scallop_mm;
     let model = sidestep::SideStepModel::new(cutter, h);
-    let w0 = model.xy_interval(f64::INFINITY, 0.0);
     // Reference step: a ball of the cutter's radius on flat ground. It sets the floor of the
-    // interval (steep walls) and the reach of the local slope/curvature estimate.
+    // interval (steep walls).
     let rr = cutter.radius();
     let w_ref = 2.0 * (2.0 * rr * h - h * h).max(0.0).sqrt();
     let floor = STEEP_FLOOR_FRACTION * w_ref;
-    let delta = 0.5 * w_ref;
-    let verify_spacing = (2.0 * cutter.radius()).max(1.0);
+    let verify_spacing = (2.0 * rr).max(1.0);
     let (mut v_lo, mut v_hi) = sampler.v_range().ok_or(PlanError::NothingToCut)?;
     if let Some(b) = cfg.boundary {
         let (a, z) = frame.v_range_of(b);
@@ -149,20 +171,16 @@ pub fn plan(
             p(done.min(1000), 1000);
         }
     };
-    let chk = Check {
-        accept,
-        spacing: c,
-        tau: cfg.tolerance_mm,
-        max_step: cfg.max_step_mm.unwrap_or(f64::INFINITY),
-        radius: cutter.radius(),
-    };
-    let eta = feed::LINEARITY_FRACTION * cfg.tolerance_mm;
-    // In v order (each interval needs the previous pass), parallel inside a pass: the exact
-    // profile, its refinement and marching, then the interval to the next pass.
-    let mut passes: Vec<PassPlan> = Vec::new();
-    let mut marched: Vec<feed::Marched> = Vec::new();
-    let mut v = v_lo;
-    loop {
+    let chk = Check::new(
+        cfg.tolerance_mm,
+        cutter.corner_radius(),
+        rr,
+        c,
+        cfg.max_step_mm.unwrap_or(f64::INFINITY),
+    );
+    let initial = cfg.section_step_mm()?;
+    let mut drops = 0usize;
+    let build = |v: f64, drops: &mut usize| -> Pass {
         let samples = sampler.u_samples(v);
         let mut range = match (samples.first(), samples.last()) {
             (Some(&a), Some(&b)) if a <= b => Some((a, b)),
@@ -175,67 +193,153 @@ pub fn plan(
             });
         }
         let prof = match range {
-            Some(r) => feed::profile(surface, &frame, v, r, &samples, c),
+            Some(r) => feed::profile(surface, &frame, v, r, &samples, initial, &chk),
             None => Profile::default(),
         };
-        let (prof, unresolved, unresolved_dev) = feed::refine(surface, &frame, v, prof, eta);
-        let sparse = verify_points(&prof, EVAL_SPACING_MM);
-        let probes = verify_points(&prof, verify_spacing);
-        let mut m = feed::march(prof, &chk);
-        m.unresolved += unresolved;
-        m.unresolved_dev = m.unresolved_dev.max(unresolved_dev);
-        // The side-step model at every CL point and at profile points ≥ 1 mm apart.
-        let mut at: Vec<(f64, f64)> = m.runs.iter().flatten().copied().collect();
-        at.extend(sparse);
-        at.sort_by(|a, b| a.0.total_cmp(&b.0));
-        at.dedup_by(|a, b| a.0 == b.0);
-        let evals: Vec<(f64, [(f64, f64); 2])> = at
-            .par_iter()
-            .map(|&p| interval::model_at(surface, &frame, &model, p, v, delta))
-            .collect();
-        let raw = evals.iter().map(|e| e.0).reduce(f64::min).unwrap_or(w0);
-        let steep = evals.iter().filter(|e| e.0 < floor).count();
-        let mut dv = raw.max(floor);
-        // Verify in CL space at points spread along the pass; shrink until it holds.
-        let mut verified_scallop = 0.0f64;
-        for _ in 0..12 {
-            let worst = probes
-                .par_iter()
-                .filter_map(|&(u, _)| interval::cl_scallop(surface, &frame, cfg, u, v, dv))
-                .reduce(|| 0.0, f64::max);
-            verified_scallop = worst;
-            if worst <= h * (1.0 + VERIFY_SLACK) || dv <= floor {
+        *drops += prof.drops;
+        let marched = feed::march(&prof, &chk);
+        Pass { v, prof, marched }
+    };
+    // The first interval's curvature needs a pass behind the first one.
+    let w0 = model.xy_interval(f64::INFINITY, 0.0);
+    let mut behind: Option<Pass> = Some(build(v_lo - w0.min(0.5 * w_ref).max(floor), &mut drops));
+    let mut cur = build(v_lo, &mut drops);
+    let mut dv_prev = cur.v - behind.as_ref().map_or(cur.v, |b| b.v);
+    let mut dv_pred = w0;
+    let mut passes: Vec<PassPlan> = Vec::new();
+    let mut marched: Vec<feed::Marched> = Vec::new();
+    loop {
+        let v = cur.v;
+        let last = v >= v_hi;
+        if last {
+            passes.push(PassPlan {
+                v,
+                predicted: 0.0,
+                steep: 0,
+            });
+            marched.push(cur.marched);
+            break;
+        }
+        // Predictor–corrector: build the next pass at the predicted interval and evaluate the
+        // side-step model against it (Algorithm 2: the chord slope to the next pass; the
+        // curvature through the passes behind, here and next). The allowed interval is not
+        // monotonic near a feature (a step that lands past a crease fails where a shorter
+        // one may not), so shrink by the model's own estimate (at least 0.5 %) until a
+        // candidate holds; the prediction grows at most twofold per pass, so passes
+        // approaching a feature across flat ground do not creep towards it.
+        let mut dv = dv_pred.max(floor).min(v_hi - v);
+        let mut good: Option<(f64, Pass, interval::Need)> = None;
+        let mut tries = 0;
+        loop {
+            let cand = build(v + dv, &mut drops);
+            let nd = interval::needed(
+                surface,
+                &frame,
+                v,
+                &model,
+                behind.as_ref().map(|b| (&b.prof, dv_prev)),
+                &cur.prof,
+                &cand.prof,
+                dv,
+                floor,
+            );
+            tries += 1;
+            drops += nd.drops;
+            let allowed = nd.interval.max(floor);
+            let shrink = allowed.min(0.995 * dv).max(floor);
+            if dv <= allowed * (1.0 + 1e-9) || dv <= floor {
+                good = Some((dv, cand, nd));
+            }
+            if tries >= MAX_TRIES {
                 break;
             }
-            dv = (dv * (0.995 * (h / worst).sqrt()).clamp(0.3, 0.995)).max(floor);
+            // The first interval that holds is taken: searching above it costs a pass build
+            // per candidate, more than the passes it saves.
+            if good.is_some() {
+                break;
+            }
+            dv = shrink.min(v_hi - v);
         }
-        let last = v >= v_hi;
-        let next = if last { v } else { (v + dv).min(v_hi) };
-        let actual = if last { 0.0 } else { next - v };
-        let predicted = if actual > 0.0 {
-            let modelled = evals
-                .iter()
-                .flat_map(|e| e.1)
-                .map(|(rho, th)| model.predicted_scallop(rho, th, actual))
-                .fold(0.0, f64::max);
-            modelled.max(verified_scallop)
-        } else {
-            0.0
+        let (mut dv, mut next, mut need) = match good {
+            Some(g) => g,
+            None => {
+                // Out of tries: the floor always holds.
+                let dv = floor.min(v_hi - v);
+                let cand = build(v + dv, &mut drops);
+                let nd = interval::needed(
+                    surface,
+                    &frame,
+                    v,
+                    &model,
+                    behind.as_ref().map(|b| (&b.prof, dv_prev)),
+                    &cur.prof,
+                    &cand.prof,
+                    dv,
+                    floor,
+                );
+                drops += nd.drops;
+                (dv, cand, nd)
+            }
         };
+        // Flat and bull cutters: verify in CL space at points spread along the pass (the
+        // model cannot see the part under a CL plateau); shrink until it holds.
+        let mut verified_scallop = 0.0f64;
+        if cutter.kind() != cam_core::CutterKind::Ball {
+            let probes = verify_points(&cur.prof, verify_spacing);
+            for _ in 0..12 {
+                let worst = probes
+                    .par_iter()
+                    .filter_map(|&(u, _)| interval::cl_scallop(surface, &frame, cfg, u, v, dv))
+                    .reduce(|| 0.0, f64::max);
+                drops += probes.len() * (interval::VERIFY_Q + 1);
+                verified_scallop = worst;
+                if worst <= h * (1.0 + VERIFY_SLACK) || dv <= floor {
+                    break;
+                }
+                dv = (dv * (0.995 * (h / worst).sqrt()).clamp(0.3, 0.995)).max(floor);
+                next = build(v + dv, &mut drops);
+                need = interval::needed(
+                    surface,
+                    &frame,
+                    v,
+                    &model,
+                    behind.as_ref().map(|b| (&b.prof, dv_prev)),
+                    &cur.prof,
+                    &next.prof,
+                    dv,
+                    floor,
+                );
+            }
+        }
+        let predicted = need
+            .evals
+            .iter()
+            .map(|&(rho, th)| model.predicted_scallop(rho, th, dv))
+            .fold(0.0, f64::max)
+            .max(verified_scallop)
+            .max(need.crease_scallop);
         passes.push(PassPlan {
             v,
             predicted,
-            steep,
+            steep: need.steep,
         });
-        marched.push(m);
         report(((v - v_lo) / (v_hi - v_lo).max(1e-12) * 1000.0) as usize);
-        if last {
-            break;
-        }
-        v = next;
+        // Next prediction: what the model allowed here, a little less, growing at most
+        // twofold per pass.
+        dv_pred = need.interval.max(floor).min(2.0 * dv);
+        dv_prev = dv;
+        let done = std::mem::replace(&mut cur, next);
+        marched.push(done.marched);
+        behind = Some(Pass {
+            v: done.v,
+            prof: done.prof,
+            marched: feed::Marched::default(),
+        });
     }
     report(1000);
-    assemble(surface, &frame, cfg, &chk, &passes, marched)
+    let mut plan = assemble(surface, &frame, cfg, &chk, &passes, marched)?;
+    plan.drops = drops;
+    Ok(plan)
 }
 
 fn assemble(
@@ -251,6 +355,7 @@ fn assemble(
     let mut unresolved_dev = 0.0f64;
     let mut predicted = 0.0f64;
     let mut steep = 0;
+    let mut sampled_moves = 0;
     // Runs of each cutting pass as 3-D tool tips, in increasing u.
     let mut cutting: Vec<(f64, Vec<Vec<DVec3>>)> = Vec::new();
     for (p, m) in passes.iter().zip(marched) {
@@ -259,6 +364,7 @@ fn assemble(
         unresolved_dev = unresolved_dev.max(m.unresolved_dev);
         predicted = predicted.max(p.predicted);
         steep += p.steep;
+        sampled_moves += m.sampled_moves;
         let runs: Vec<Vec<DVec3>> = m
             .runs
             .into_iter()
@@ -382,22 +488,45 @@ fn assemble(
         check_spacing_mm: chk.spacing,
         safe_z_mm: safe_z,
         pass_v_mm: pass_v,
+        drops: 0,
+        sampled_moves,
     })
 }
 
-/// A link `a → b` may follow the surface when its XY length is at most `max_len` mm and, at
-/// check points no more than the check spacing apart, the cutter touches the part and the
-/// straight move is nowhere more than the acceptance threshold below the exact CL surface.
+/// A link `a → b` may follow the surface when its XY length is at most `max_len` mm, the
+/// cutter touches the part all along it, and the link provably does not gouge: with ball and
+/// bull cutters, exact samples at most the check spacing apart (3-D) and the lemma of
+/// `docs/plan-math.md` §1 bound the penetration by τ; with a flat end mill, samples that
+/// close are within τ − η of the exact CL z (sampling argument). Excess is allowed: it is air.
 pub(crate) fn link_ok(s: &dyn ClSurface, chk: &Check, a: DVec3, b: DVec3, max_len: f64) -> bool {
     let len = a.truncate().distance(b.truncate());
     if len > max_len {
         return false;
     }
-    let n = (len / chk.spacing).ceil().max(1.0) as usize;
-    (1..n).all(|j| {
+    let n = (a.distance(b) / chk.spacing).ceil().max(1.0) as usize;
+    let mut ups = Vec::with_capacity(n + 1);
+    for j in 0..=n {
         let t = j as f64 / n as f64;
         let p = a.lerp(b, t);
-        matches!(s.z_tip(p.x, p.y), Some(z) if p.z >= z - chk.accept)
+        let z = if j == 0 || j == n {
+            p.z
+        } else {
+            match s.z_tip(p.x, p.y) {
+                Some(z) => z,
+                None => return false,
+            }
+        };
+        ups.push((z - p.z).max(0.0));
+    }
+    let r = chk.corner;
+    if r <= 0.0 {
+        return ups.iter().all(|&u| u <= chk.accept);
+    }
+    let l = a.distance(b) / n as f64;
+    ups.windows(2).all(|w| {
+        let up = w[0].max(w[1]);
+        let q = (r - up) * (r - up) - l * l / 4.0;
+        up < r && q >= 0.0 && r - q.sqrt() <= chk.tau
     })
 }
 

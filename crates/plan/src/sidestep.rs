@@ -208,6 +208,11 @@ impl SideStepModel {
         SideStepModel { cutter, h, table }
     }
 
+    /// The scallop height h (mm) the model was built for.
+    pub fn scallop(&self) -> f64 {
+        self.h
+    }
+
     /// Effective radius (mm) at slope `theta` (radians); see [`effective_radius`].
     pub fn effective_radius(&self, theta: f64) -> f64 {
         if self.table.is_empty() {
@@ -255,7 +260,11 @@ fn part_radius(cutter: &Cutter, rho_cl: f64) -> f64 {
 
 fn interval_with(cutter: &Cutter, r_eff: f64, rho_cl: f64, theta: f64, h: f64) -> f64 {
     let cap = MAX_STEPOVER_FRACTION * cutter.diameter();
-    let w = ball_step(r_eff, part_radius(cutter, rho_cl), h).map_or(0.0, |w| w.min(cap));
+    let rho = part_radius(cutter, rho_cl);
+    // No step leaves a cusp of h: on a convex section that sharp the cusp stays below h
+    // at every step (the cutter rolls round the edge), so the cap applies; on a concave one
+    // tighter than the cutter no step is safe.
+    let w = ball_step(r_eff, rho, h).map_or(if rho > 0.0 { cap } else { 0.0 }, |w| w.min(cap));
     w * theta.cos()
 }
 

@@ -22,17 +22,31 @@ fn dome_moves_stay_within_tolerance() {
     let mut c = cfg(ball);
     c.scallop_mm = 0.05;
     let p = plan(&s, &sampler, &c, None).unwrap();
-    let (gouge, excess) = dense_deviation(&s, &p.toolpath, 400);
+    let (_, excess) = dense_deviation(&s, &p.toolpath, 400);
+    // Exact penetration of the ball: the part is the hemisphere of radius 15 on the plane
+    // z = 0, so the ball centre's distance to it is min(|c| − 15, c.z) (above the plane).
+    let mut pen = 0.0f64;
+    for w in p.toolpath.moves.windows(2) {
+        if w[1].kind != cam_core::MoveKind::Cut || w[1].pass.is_none() {
+            continue;
+        }
+        for k in 0..=400 {
+            let tip = w[0].pose.tip.lerp(w[1].pose.tip, k as f64 / 400.0);
+            let c = tip + cam_core::DVec3::Z * 3.0;
+            let d = (c.length() - 15.0).min(c.z);
+            pen = pen.max(3.0 - d);
+        }
+    }
     assert!(
-        gouge <= 0.01 && excess <= 0.01,
-        "gouge {gouge} excess {excess}"
+        pen <= 0.01 + 1e-12 && excess <= 0.01,
+        "penetration {pen} excess {excess}"
     );
     assert!(
-        p.max_chord_deviation_mm <= 0.009 + 1e-12,
+        p.max_chord_deviation_mm <= 0.01 + 1e-12,
         "{}",
         p.max_chord_deviation_mm
     );
-    assert!(gouge > 0.005, "march not too timid: gouge {gouge}");
+    assert!(pen > 0.004, "march not too timid: penetration {pen}");
     assert_eq!(p.unresolved_joins, 0);
 }
 
@@ -52,8 +66,10 @@ fn cylinder_along_pass_steps_match_eq1() {
         "gouge {gouge} excess {excess}"
     );
     // Chord lengths against Eq. 1 with ρ_cl = ρ + R = 23 mm (interior moves of the first
-    // pass). Moves are accepted at 0.8·τ and end on profile points (≤ 0.155 mm apart), so
-    // they come out between 0.75 and sqrt(0.8) ≈ 0.894 of Eq. 1 at τ.
+    // pass). No move may beat Eq. 1 (its own sag would exceed τ). A proven move spends part
+    // of τ on the CL between its interior samples: samples l ≈ 0.375 mm apart (3 mm halved
+    // three times to fit the lemma's 0.49 mm) cost up to l²/(8R) ≈ 0.0059, leaving a sag of
+    // about 0.0041 for the chord: L ≈ sqrt(8·23·0.0041) ≈ 0.64 of Eq. 1 at the least.
     let eq1 = 2.0 * (2.0 * 0.01 * 23.0 - 1e-4f64).sqrt();
     let lens: Vec<f64> = p
         .toolpath
@@ -68,7 +84,7 @@ fn cylinder_along_pass_steps_match_eq1() {
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2];
     assert!(
-        median > 0.75 * eq1 && median <= 0.9 * eq1,
+        median > 0.6 * eq1 && sorted[sorted.len() - 1] <= eq1,
         "median chord {median} vs Eq. 1 {eq1}"
     );
 }

@@ -107,17 +107,22 @@ fn zigzag_links_follow_flat_ground_one_way_retracts() {
     }
 }
 
-/// A ridge between pass ends: at x = 10 the CL surface has a tent 1 mm high across y, so
-/// the zig-zag link along y would gouge; it must retract instead.
+/// A ridge between pass ends: the exact CL surface of a ball of radius 3 over the plane
+/// z = 0 and a horizontal ridge segment 1 mm high from (9.5, 1.5) to (10.5, 1.5) (the tip
+/// rests on the segment at XY distance d ≤ 3 with z = 1 − 3 + sqrt(9 − d²)). Passes at
+/// y = 0 and y = 3 end at x = 10 with the tip 0.60 mm high; the zig-zag link between them
+/// would cross the ridge's 1 mm: it must retract.
 struct RidgeAtEnds;
 impl ClSurface for RidgeAtEnds {
     fn z_tip(&self, x: f64, y: f64) -> Option<f64> {
-        let ridge = if x > 9.0 {
-            (x - 9.0) * (0.5 - ((y * 10.0).rem_euclid(1.0) - 0.5).abs()) * 2.0
+        let dx = (x - x.clamp(9.5, 10.5)).abs();
+        let d2 = dx * dx + (y - 1.5) * (y - 1.5);
+        let ridge = if d2 <= 9.0 {
+            1.0 - 3.0 + (9.0 - d2).sqrt()
         } else {
             0.0
         };
-        Some(ridge)
+        Some(ridge.max(0.0))
     }
 }
 
@@ -126,12 +131,17 @@ fn links_retract_when_they_would_gouge() {
     let ball = Cutter::ball(6.0).unwrap();
     let sampler = UniformSampler {
         u_range: (0.0, 10.0),
-        v_range: (0.0, 0.3),
+        v_range: (0.0, 3.0),
         step_mm: 0.5,
     };
     let mut c = cfg(ball);
     c.scallop_mm = 0.5;
     let p = plan(&RidgeAtEnds, &sampler, &c, None).unwrap();
+    assert_eq!(
+        p.pass_v_mm,
+        vec![0.0, 3.0],
+        "two passes straddling the ridge"
+    );
     assert!(
         p.retracts >= 1,
         "{} retracts, {} links",

@@ -7,4 +7,5 @@ mod feed_forward;
 mod links_ends;
 #[cfg(feature = "mesh")]
 mod mesh;
+mod penetration;
 mod side_step;

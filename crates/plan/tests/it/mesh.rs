@@ -122,15 +122,23 @@ fn dome_obj_ball_tolerance_and_scallop() {
     let p = plan_part(&mesh, &cfg, None).unwrap();
     let dc = DropCutter::new(&mesh, ball);
     let (g, e, n) = dense_vs_drop(&dc, &p);
+    // The guarantee: the ball's penetration (normal depth, exact) and the vertical excess.
+    let tris: Vec<_> = mesh.triangles().iter().map(|t| t.v).collect();
+    let pen = crate::penetration::ball_penetration(&tris, 3.0, &p.toolpath, 0.01);
     eprintln!(
-        "dome.obj ball:6 τ 0.01 h 0.02: passes {} cl {} gouge {g:.5} excess {e:.5} over {n} samples; planner max dev {:.5}, unresolved {}, predicted scallop {:.5}",
+        "dome.obj ball:6 τ 0.01 h 0.02: passes {} cl {} penetration {pen:.5} (vertical {g:.5}) excess {e:.5} over {n} samples; planner bound {:.5}, unresolved {}, predicted scallop {:.5}",
         p.passes,
         p.cl_points,
         p.max_chord_deviation_mm,
         p.unresolved_joins,
         p.predicted_max_scallop_mm
     );
-    assert!(g <= 0.01 && e <= 0.01, "gouge {g} excess {e}");
+    assert!(
+        pen <= 0.01 + 1e-12 && e <= 0.01,
+        "penetration {pen} excess {e}"
+    );
+    assert!(p.max_chord_deviation_mm <= 0.01 + 1e-12);
+    assert!(pen > 0.003, "march not too timid: penetration {pen}");
     // Scallop on the cap (reachable by the ball: within 19.8 mm of the axis).
     let top = TopZ::new(&mesh);
     let part = |x: f64, y: f64| top.z(x, y);
