@@ -47,8 +47,10 @@ pub struct PlanConfig {
     pub milling: Milling,
     /// Stock/boundary box `(xmin, xmax, ymin, ymax)` (mm) the tool tip must stay inside.
     pub boundary: Option<(f64, f64, f64, f64)>,
-    /// Largest spacing (mm) of the exact profile points along a pass (before refinement);
-    /// `None` = `sqrt(0.8·R·τ)`. At most the cutter diameter.
+    /// Largest spacing (mm) of profile samples on the sampled path (flat end mills, CL
+    /// surfaces without certificates; see `docs/plan-math.md` §1); `None` = half the cutter
+    /// radius. At most the cutter diameter. Ball and bull cutters sample at the lemma's
+    /// spacing instead.
     pub check_spacing_mm: Option<f64>,
     /// Longest cut move (mm); `None` = unlimited.
     pub max_step_mm: Option<f64>,
@@ -189,7 +191,7 @@ impl PlanConfig {
             return Err(PlanError::MaxStep(m));
         }
         let rr = self.cutter.radius();
-        let c = self.check_spacing_mm.unwrap_or((0.8 * rr * tau).sqrt());
+        let c = self.check_spacing_mm.unwrap_or(0.5 * rr);
         let accept = (1.0 - crate::feed::LINEARITY_FRACTION) * tau;
         if !(c.is_finite() && c > 0.0 && c <= 2.0 * rr) {
             return Err(PlanError::CheckSpacing(c));
