@@ -45,11 +45,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     p.pass_v_mm.clear();
     println!("{}", serde_json::to_string_pretty(&p)?);
     println!(
-        "{{\"part\": \"{path}\", \"cutter\": \"{}\", \"moves\": {moves}, \"cl_points\": {}, \"drops\": {}, \"drops_per_cl_point\": {:.2}, \"seconds\": {secs:.3}, \"drop_seconds_for_cl_points\": {drop_secs:.4}, \"ratio\": {:.2}}}",
+        "{{\"part\": \"{path}\", \"cutter\": \"{}\", \"moves\": {moves}, \"cl_points\": {}, \"drops\": {}, \"drops_per_cl_point\": {:.2}, \"passes\": {}, \"pass_builds\": {}, \"seconds\": {secs:.3}, \"drop_seconds_for_cl_points\": {drop_secs:.4}, \"ratio\": {:.2}}}",
         cfg.cutter,
         xy.len(),
         p.drops,
         p.drops as f64 / xy.len() as f64,
+        p.passes,
+        p.pass_builds,
         secs / drop_secs
     );
     Ok(())

@@ -4,32 +4,32 @@
 //! The planner works on any [`ClSurface`] (the exact tool-tip height of the cutter resting on
 //! the part); [`cam_offset::DropCutter`] is one. Passes are lines `v = const` of a raster frame
 //! rotated by `angle_deg`; along each pass the exact CL profile is marched (the seed's
-//! Algorithm 1 started from its Eq. 1, then every move checked exactly); the side step
-//! (Eq. 2 re-derived, times `cos θ`) is the minimum over the pass of the scallop-limited
-//! interval. The maths is in `docs/plan-math.md`.
+//! Algorithm 1 started from its Eq. 1, every move proven within τ); the side step (Eq. 2
+//! re-derived, times `cos θ`, the seed's Algorithm 2 against the next pass) is the minimum
+//! over the pass of the scallop-limited interval. The maths is in `docs/plan-math.md`.
 //!
-//! # Guarantees (measured, not estimated)
-//! - **Feed-forward.** Each pass's exact CL profile (samples merged with a grid of spacing
-//!   `c`) is refined until every neighbour pair passes a midpoint test (exact z at the
-//!   midpoint within η/2 of the chord, η = 0.2·τ) and a crease test (length × slope change
-//!   to the neighbouring pairs ≤ η); a move is accepted only if it is within `τ − η` of the
-//!   exact CL z (vertical distance, gouge and excess alike) at every profile point and tested
-//!   midpoint it spans. Between those points the CL surface then differs from the profile
-//!   polyline by about η at most when each pair holds one crease or slowly varying curvature,
-//!   so every move is within τ. This is a sampling argument, not a proof for arbitrary
-//!   surfaces. Pairs that cannot be resolved above 1e-5 mm (vertical jumps or tangents of the
-//!   CL surface) are counted in [`Plan::unresolved_joins`]. The tests check every move
-//!   densely and independently (0.01 mm or 400 samples per move).
-//! - **Side step.** The interval after each pass is the minimum, over the pass's CL points
-//!   and profile points 1 mm apart, of the model's scallop-limited interval (re-derived Eq. 2 with the cutter's
-//!   effective radius, the CL section's curvature, and the slope of the chord to the next
-//!   pass: ε·cos θ). It is then verified in CL space at points every 2R along the pass (the
-//!   cusp between the two passes against the best surface the cutter can leave, computed
-//!   from the CL surface alone) and shrunk until that verification reports ≤ h(1 + 1e-3).
-//!   The model is exact for a ball on cylinders and planes and for a bull on its corner;
+//! # Guarantees
+//! - **Feed-forward (proven for ball and bull cutters).** Every cut move on a pass
+//!   penetrates the part by at most τ (the cutter's depth into the material, normal to the
+//!   part) and stays at most τ above the exact CL surface. Each pass's exact profile is refined
+//!   until every gap between samples carries a bound: the lemma of `docs/plan-math.md` §1
+//!   (penetration ≤ `r − sqrt((r − g)² − L²/4)` between points `L` apart and `g` below the CL
+//!   surface, `r` the corner radius), the contact pieces' bound on the CL's dip below a chord,
+//!   or a plane certificate over flat ground. The lemma needs only exact samples of a genuine
+//!   CL surface; the dip and plane bounds need a [`ClSurface`] that certifies (the
+//!   drop-cutter of a mesh does). Flat end mills (no corner radius) and surfaces without
+//!   certificates fall back to midpoint tests for what those bounds cannot give (a sampling
+//!   argument; such moves are counted in [`Plan::sampled_moves`]). Vertical walls of the CL surface that cannot be resolved above
+//!   1e-5 mm are counted in [`Plan::unresolved_joins`].
+//! - **Side step.** The interval after each pass is the minimum, over both passes' samples
+//!   and points 1 mm apart, of the model's scallop-limited interval (re-derived Eq. 2 with the
+//!   cutter's effective radius, the curvature through three passes, and the slope of the chord
+//!   to the next pass: ε·cos θ); where the curvature is a crease the scallop is measured with
+//!   drops between the passes. The model is exact for a ball on cylinders and planes;
 //!   [`measure_scallop`] measures what is left against the part itself.
 //! - **No plunges into the void.** Passes end where the cutter stops touching the part
-//!   (located to 1e-5 mm) or at the boundary box; links follow the surface only when checked.
+//!   (located to 1e-5 mm) or at the boundary box; links follow the surface only when the same
+//!   bounds prove them.
 //!
 //! The library never prints; progress goes to an optional callback.
 

@@ -104,6 +104,9 @@ pub struct Plan {
     pub pass_v_mm: Vec<f64>,
     /// Exact CL samples (drop-cutter queries) the plan cost.
     pub drops: usize,
+    /// Pass profiles built: the passes kept, the candidates the side-step search rejected,
+    /// and the pass behind the first one.
+    pub pass_builds: usize,
     /// Cut moves on passes whose bound rests on sampling somewhere (flat end mills, surfaces
     /// without certificates); every other move's bound is proven (see the crate docs).
     pub sampled_moves: usize,
@@ -180,7 +183,9 @@ fn plan_passes(
     );
     let initial = cfg.section_step_mm()?;
     let mut drops = 0usize;
+    let builds = std::cell::Cell::new(0usize);
     let build = |v: f64, drops: &mut usize| -> Pass {
+        builds.set(builds.get() + 1);
         let samples = sampler.u_samples(v);
         let mut range = match (samples.first(), samples.last()) {
             (Some(&a), Some(&b)) if a <= b => Some((a, b)),
@@ -339,6 +344,7 @@ fn plan_passes(
     report(1000);
     let mut plan = assemble(surface, &frame, cfg, &chk, &passes, marched)?;
     plan.drops = drops;
+    plan.pass_builds = builds.into_inner();
     Ok(plan)
 }
 
@@ -489,6 +495,7 @@ fn assemble(
         safe_z_mm: safe_z,
         pass_v_mm: pass_v,
         drops: 0,
+        pass_builds: 0,
         sampled_moves,
     })
 }
