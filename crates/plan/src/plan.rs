@@ -211,6 +211,11 @@ fn plan_passes(
     let mut cur = build(v_lo, &mut drops);
     let mut dv_prev = cur.v - behind.as_ref().map_or(cur.v, |b| b.v);
     let mut dv_pred = w0;
+    // Running mean of the relative change of the allowed interval from pass to pass: where it
+    // jitters (a crease's measured scallop moves with the passes) the prediction leaves a
+    // margin, since a rejected candidate costs a pass profile; on smooth sections it is 0.
+    let mut jitter = 0.0f64;
+    let mut allowed_prev: Option<f64> = None;
     let mut passes: Vec<PassPlan> = Vec::new();
     let mut marched: Vec<feed::Marched> = Vec::new();
     loop {
@@ -251,7 +256,11 @@ fn plan_passes(
             tries += 1;
             drops += nd.drops;
             let allowed = nd.interval.max(floor);
-            let shrink = allowed.min(0.995 * dv).max(floor);
+            // The first shrink goes to what the model allows (exact on smooth sections);
+            // where that still fails (a crease's measured scallop moves with the passes)
+            // later ones leave a margin.
+            let margin = if tries == 1 { 1.0 } else { 0.97 };
+            let shrink = (margin * allowed).min(0.995 * dv).max(floor);
             if dv <= allowed * (1.0 + 1e-9) || dv <= floor {
                 good = Some((dv, cand, nd));
             }
@@ -329,9 +338,16 @@ fn plan_passes(
             steep: need.steep,
         });
         report(((v - v_lo) / (v_hi - v_lo).max(1e-12) * 1000.0) as usize);
-        // Next prediction: what the model allowed here, a little less, growing at most
-        // twofold per pass.
-        dv_pred = need.interval.max(floor).min(2.0 * dv);
+        // Next prediction: what the model allowed here (less the jitter margin), growing at
+        // most twofold per pass.
+        let allowed = need.interval.max(floor);
+        if let Some(prev) = allowed_prev {
+            jitter = 0.7 * jitter + 0.3 * ((allowed - prev).abs() / prev);
+        }
+        allowed_prev = Some(allowed);
+        dv_pred = (allowed * (1.0 - (2.0 * jitter).min(0.05)))
+            .max(floor)
+            .min(2.0 * dv);
         dv_prev = dv;
         let done = std::mem::replace(&mut cur, next);
         marched.push(done.marched);
