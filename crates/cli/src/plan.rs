@@ -374,8 +374,10 @@ pub fn run(a: PlanArgs) -> Result<()> {
         "plunge_retract_length_mm": plunge_len,
         "estimated_cycle_time_min": cycle_min,
         "max_chord_deviation_mm": plan.max_chord_deviation_mm,
+        "sampled_moves": plan.sampled_moves,
         "predicted_max_scallop_mm": plan.predicted_max_scallop_mm,
         "unresolved_joins": plan.unresolved_joins,
+        "drops": plan.drops,
         "safe_z_mm": plan.safe_z_mm,
         "plan_s": t_plan, "holder": holder_json,
         "verify": verification.as_ref().map(|v| serde_json::json!({
@@ -390,8 +392,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
     } else {
         eprintln!(
             "cam plan: {} passes, {} CL points, cut {:.0} mm, rapid {:.0} mm, ~{:.1} min; \
-             chordal deviation ≤ {:.4} mm (τ {}), scallop ≤ {:.4} mm (h {}); holder: {} collisions, \
-             minimum stick-out {} -> {}",
+             penetration and excess ≤ {:.4} mm (τ {}{}), scallop ≤ {:.4} mm (h {}); holder: {} \
+             collisions, minimum stick-out {} -> {}",
             plan.passes,
             plan.cl_points,
             cut_len,
@@ -399,6 +401,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
             cycle_min,
             plan.max_chord_deviation_mm,
             a.tolerance,
+            if plan.sampled_moves > 0 {
+                format!(", {} moves checked by sampling", plan.sampled_moves)
+            } else {
+                ", proven".to_string()
+            },
             plan.predicted_max_scallop_mm,
             a.scallop,
             report.collisions.len(),
