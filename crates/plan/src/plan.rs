@@ -127,7 +127,7 @@ pub fn plan(
     let cutter = cfg.cutter;
     let h = cfg.scallop_mm;
     let model = sidestep::SideStepModel::new(cutter, h);
-    let w0 = model.xy_interval(f64::INFINITY, 0.0);
+    let w0 = model.xy_interval(0.0, 0.0, f64::INFINITY);
     // Reference step: a ball of the cutter's radius on flat ground. It sets the floor of the
     // interval (steep walls) and the reach of the local slope/curvature estimate.
     let rr = cutter.radius();
@@ -181,6 +181,7 @@ pub fn plan(
         let (prof, unresolved, unresolved_dev) = feed::refine(surface, &frame, v, prof, eta);
         let sparse = verify_points(&prof, EVAL_SPACING_MM);
         let probes = verify_points(&prof, verify_spacing);
+        let slopes = interval::AlongSlopes::new(&prof);
         let mut m = feed::march(prof, &chk);
         m.unresolved += unresolved;
         m.unresolved_dev = m.unresolved_dev.max(unresolved_dev);
@@ -189,9 +190,9 @@ pub fn plan(
         at.extend(sparse);
         at.sort_by(|a, b| a.0.total_cmp(&b.0));
         at.dedup_by(|a, b| a.0 == b.0);
-        let evals: Vec<(f64, [(f64, f64); 2])> = at
+        let evals: Vec<(f64, [interval::ModelInput; 2])> = at
             .par_iter()
-            .map(|&p| interval::model_at(surface, &frame, &model, p, v, delta))
+            .map(|&p| interval::model_at(surface, &frame, &model, p, slopes.at(p.0), v, delta))
             .collect();
         let raw = evals.iter().map(|e| e.0).reduce(f64::min).unwrap_or(w0);
         let steep = evals.iter().filter(|e| e.0 < floor).count();
@@ -201,7 +202,9 @@ pub fn plan(
         for _ in 0..12 {
             let worst = probes
                 .par_iter()
-                .filter_map(|&(u, _)| interval::cl_scallop(surface, &frame, cfg, u, v, dv))
+                .filter_map(|&(u, _)| {
+                    interval::cl_scallop(surface, &frame, &model, u, slopes.at(u), v, dv)
+                })
                 .reduce(|| 0.0, f64::max);
             verified_scallop = worst;
             if worst <= h * (1.0 + VERIFY_SLACK) || dv <= floor {
@@ -216,7 +219,7 @@ pub fn plan(
             let modelled = evals
                 .iter()
                 .flat_map(|e| e.1)
-                .map(|(rho, th)| model.predicted_scallop(rho, th, actual))
+                .map(|(p, q, rho)| model.predicted_scallop(p, q, rho, actual))
                 .fold(0.0, f64::max);
             modelled.max(verified_scallop)
         } else {
