@@ -12,22 +12,50 @@ use crate::{ClSurface, sidestep};
 /// - pairs across a gap;
 /// - pairs no longer than [`MIN_DU_MM`] (the refinement's floor): the unresolved vertical
 ///   jumps where a flat or bull cutter's side meets a wall across the pass, motions that cut
-///   that wall with the cutter's side rather than the surface between passes.
+///   that wall with the cutter's side rather than the surface between passes;
+/// - pairs on a convex arc of the profile turning at least `1 / (EDGE_ARC·r)` (r the corner
+///   radius): there the corner rolls over an edge of the part (the CL profile is an arc of
+///   radius r about it), the contact is the edge itself, and the steep motion sweeps no face
+///   that a scallop could be left on; the faces either side are covered by their own
+///   profile points. A face of convex radius ρ along the pass turns at `1/(ρ + r)`, so
+///   only faces sharper than `(EDGE_ARC − 1)·r` count as edges.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct AlongSlopes {
     us: Vec<f64>,
     slopes: Vec<f64>,
 }
 
+/// Profile arcs turning faster than `1 / (EDGE_ARC·r)` are a corner of radius r rolling over
+/// an edge ([`AlongSlopes`]).
+const EDGE_ARC: f64 = 1.25;
+
 impl AlongSlopes {
-    /// The slopes of `prof`'s points.
-    pub(crate) fn new(prof: &Profile) -> AlongSlopes {
+    /// The slopes of `prof`'s points for a cutter of corner radius `r` mm.
+    pub(crate) fn new(prof: &Profile, r: f64) -> AlongSlopes {
         let pts = &prof.pts;
         let n = pts.len();
         let m = n.saturating_sub(1);
-        let keep: Vec<bool> = (0..m)
+        let mut keep: Vec<bool> = (0..m)
             .map(|j| pts[j + 1].0 - pts[j].0 > MIN_DU_MM)
             .collect();
+        if r > 0.0 {
+            let turn = |j: usize| ((pts[j + 1].1 - pts[j].1) / (pts[j + 1].0 - pts[j].0)).atan();
+            let len = |j: usize| (pts[j + 1].0 - pts[j].0).hypot(pts[j + 1].1 - pts[j].1);
+            let mut edge = vec![false; m];
+            for j in 0..m.saturating_sub(1) {
+                if prof.brk[j] || prof.brk[j + 1] || !(keep[j] && keep[j + 1]) {
+                    continue;
+                }
+                let k = (turn(j) - turn(j + 1)) / (0.5 * (len(j) + len(j + 1)));
+                if k * EDGE_ARC * r >= 1.0 {
+                    edge[j] = true;
+                    edge[j + 1] = true;
+                }
+            }
+            for j in 0..m {
+                keep[j] &= !edge[j];
+            }
+        }
         let pair = |j: usize| -> Option<f64> {
             keep[j].then(|| ((pts[j + 1].1 - pts[j].1) / (pts[j + 1].0 - pts[j].0)).abs())
         };
@@ -356,6 +384,58 @@ pub(crate) fn cl_scallop(
 mod tests {
     use super::*;
     use cam_core::Cutter;
+
+    fn profile(pts: Vec<(f64, f64)>) -> Profile {
+        let n = pts.len();
+        Profile {
+            pts,
+            brk: vec![false; n],
+            mids: vec![None; n],
+        }
+    }
+
+    /// The slope along a pass: a plane's own slope; a vertical jump (a wall across the pass)
+    /// and a corner rolling over an edge (an arc of the corner radius) are left out, points
+    /// on them take the faces' slopes either side; a convex face of radius 5r is kept.
+    #[test]
+    fn along_slopes_leave_out_walls_and_edges() {
+        let r = 1.5;
+        // Plane rising at 0.2, a wall 3 mm high at u = 5 (a pair 5 µm long), plane again.
+        let mut pts: Vec<(f64, f64)> = (0..=50)
+            .map(|k| (0.1 * k as f64, 0.02 * k as f64))
+            .collect();
+        pts.push((5.0 + 5e-6, 1.0 + 3.0));
+        pts.extend((1..=50).map(|k| (5.0 + 5e-6 + 0.1 * k as f64, 4.0 + 0.02 * k as f64)));
+        let sl = AlongSlopes::new(&profile(pts.clone()), r);
+        for &(u, _) in &pts {
+            cam_core::assert_near!(sl.at(u), 0.2, 1e-9, "u {u}");
+        }
+        // Level ground, then the corner rolls off the edge at u = 0: an arc of radius r
+        // (tip z = −r + sqrt(r² − u²) for 0 ≤ u < r), down to slope −3.
+        let arc_end = r * 3.0 / 10f64.sqrt();
+        let mut pts: Vec<(f64, f64)> = (0..=20).map(|k| (-2.0 + 0.1 * k as f64, 0.0)).collect();
+        pts.extend((1..=40).map(|k| {
+            let u = arc_end * k as f64 / 40.0;
+            (u, -r + (r * r - u * u).sqrt())
+        }));
+        let sl = AlongSlopes::new(&profile(pts.clone()), r);
+        for &(u, _) in &pts {
+            assert!(sl.at(u) < 1e-9, "u {u}: {}", sl.at(u));
+        }
+        // A convex face of radius 5r along the pass (turning at 1/(5r + r) < 1/(1.25 r)):
+        // its slope counts.
+        let big = 6.0 * r;
+        let pts: Vec<(f64, f64)> = (0..=40)
+            .map(|k| {
+                let u = 0.1 * k as f64;
+                (u, (big * big - u * u).sqrt())
+            })
+            .collect();
+        let sl = AlongSlopes::new(&profile(pts.clone()), r);
+        let (u, _) = pts[30];
+        let want = (pts[31].1 - pts[30].1) / (pts[31].0 - pts[30].0);
+        cam_core::assert_near!(sl.at(u), want.abs(), 1e-12);
+    }
 
     /// On a convex cylinder (CL radius 23 mm, ball R = 3), the model's interval is the exact
     /// formula and the CL-space verification of that interval finds h (to its sampling).

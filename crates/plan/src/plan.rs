@@ -181,7 +181,7 @@ pub fn plan(
         let (prof, unresolved, unresolved_dev) = feed::refine(surface, &frame, v, prof, eta);
         let sparse = verify_points(&prof, EVAL_SPACING_MM);
         let probes = verify_points(&prof, verify_spacing);
-        let slopes = interval::AlongSlopes::new(&prof);
+        let slopes = interval::AlongSlopes::new(&prof, cutter.corner_radius());
         let mut m = feed::march(prof, &chk);
         m.unresolved += unresolved;
         m.unresolved_dev = m.unresolved_dev.max(unresolved_dev);
