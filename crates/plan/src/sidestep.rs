@@ -420,7 +420,7 @@ impl SideStepModel {
 
     /// The circle (radius, mm) and part radius (mm) the curvature treatment uses at gradient
     /// `(p, q)` and vertical-section radius `rho_cl`, and the section's slope θ: the effective
-    /// radius.
+    /// radius, or on a concave section it cannot sit in, the corner radius r.
     fn circle(&self, p: f64, q: f64, rho_cl: f64) -> (f64, f64, f64) {
         let (alpha, theta) = section_angles(p, q);
         let sil = Silhouette::new(&self.cutter, alpha);
@@ -429,7 +429,12 @@ impl SideStepModel {
         let w = (dm + dp).min(MAX_STEPOVER_FRACTION * self.cutter.diameter());
         let r_eff = ((w / 2.0).powi(2) + h * h) / (2.0 * h);
         let rho = part_radius(section_radius(rho_cl, p, q), sil.radius(theta));
-        (r_eff, rho, theta)
+        let r = if ball_step(r_eff, rho, h).is_none() && rho < 0.0 {
+            self.cutter.corner_radius()
+        } else {
+            r_eff
+        };
+        (r, rho, theta)
     }
 
     /// The XY interval (mm) to the next pass at a CL point where the CL surface has gradient
@@ -438,7 +443,13 @@ impl SideStepModel {
     /// `w·cos θ` with `w` [`ball_step`] of the effective radius on the part's radius in the
     /// plane perpendicular to the motion, `ρ = ρ⊥ − r_c` ([`section_radius`], `r_c` the
     /// outline's [`Silhouette::radius`] at the contact), capped at [`MAX_STEPOVER_FRACTION`]·D.
-    /// Exact on straight sections and for a ball on cylinders; 0 when no step leaves h.
+    /// On a concave section tighter than the effective circle (a bull's flat bottom across a
+    /// valley, or a concave crease of the CL surface such as the foot of a boss), [`ball_step`]
+    /// of the corner radius r instead: conservative, since the outline's radius of curvature
+    /// is nowhere below r, so the corner circle touching where the cutter touches lies inside
+    /// the cutter and leaves a cusp at least as high. Exact on straight sections and for a
+    /// ball on cylinders; 0 when no step leaves h (a flat end mill on a concave section
+    /// narrower than its effective circle).
     pub fn xy_interval(&self, p: f64, q: f64, rho_cl: f64) -> f64 {
         let (r, rho, theta) = self.circle(p, q, rho_cl);
         let cap = MAX_STEPOVER_FRACTION * self.cutter.diameter();
@@ -899,6 +910,29 @@ mod tests {
         let al = 0.3f64;
         assert!(rel(section_radius(20.0, al.tan(), 0.0), 20.0 / al.cos()) < 1e-14);
         assert!(section_radius(f64::INFINITY, 0.5, 0.5).is_infinite());
+    }
+
+    /// A concave section tighter than the effective circle: the bull's flat-ground circle
+    /// (35.6 mm for h = 0.05) does not fit a CL valley of radius 5 mm; the corner circle does,
+    /// and round-trips.
+    #[test]
+    fn concave_section_tighter_than_the_effective_circle_uses_the_corner() {
+        let m = SideStepModel::new(bull(), 0.05);
+        let r_eff = m.effective_radius(0.0, 0.0);
+        cam_core::assert_near!(
+            r_eff,
+            ((1.5 + (0.15f64 - 0.0025).sqrt()).powi(2) + 0.0025) / 0.1,
+            1e-9
+        );
+        assert!(ball_step(r_eff, -5.0 - 1.5, 0.05).is_none());
+        let want = ball_step(1.5, -5.0 - 1.5, 0.05).unwrap();
+        cam_core::assert_near!(m.xy_interval(0.0, 0.0, -5.0), want, 1e-12);
+        cam_core::assert_near!(m.predicted_scallop(0.0, 0.0, -5.0, want), 0.05, 1e-12);
+        // A flat end mill has no corner: no step fits.
+        assert_eq!(
+            SideStepModel::new(flat(), 0.05).xy_interval(0.0, 0.0, -5.0),
+            0.0
+        );
     }
 
     #[test]
