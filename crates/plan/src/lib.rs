@@ -20,14 +20,18 @@
 //!   surfaces. Pairs that cannot be resolved above 1e-5 mm (vertical jumps or tangents of the
 //!   CL surface) are counted in [`Plan::unresolved_joins`]. The tests check every move
 //!   densely and independently (0.01 mm or 400 samples per move).
-//! - **Side step.** The interval after each pass is the minimum, over the pass's CL points
-//!   and profile points 1 mm apart, of the model's scallop-limited interval (re-derived Eq. 2 with the cutter's
-//!   effective radius, the CL section's curvature, and the slope of the chord to the next
-//!   pass: ε·cos θ). It is then verified in CL space at points every 2R along the pass (the
-//!   cusp between the two passes against the best surface the cutter can leave, computed
-//!   from the CL surface alone) and shrunk until that verification reports ≤ h(1 + 1e-3).
-//!   The model is exact for a ball on cylinders and planes and for a bull on its corner;
-//!   [`measure_scallop`] measures what is left against the part itself.
+//! - **Side step.** The scallop forms in the plane perpendicular to the motion along the pass,
+//!   where the cutter shows its outline seen along that motion ([`sidestep::Silhouette`]:
+//!   its axial profile only on level motion). The interval after each pass is the minimum,
+//!   over the pass's CL points and profile points 1 mm apart, of the model's
+//!   scallop-limited interval (the outline's exact step on a straight section, re-derived
+//!   Eq. 2 with the resulting effective radius and the CL section's curvature, and the slope
+//!   of the chord to the next pass: ε·cos θ). It is then verified in CL space at points every
+//!   2R along the pass (the cusp between the two passes against the best surface the cutter
+//!   can leave, computed from the CL surface alone in that plane) and shrunk until that
+//!   verification reports ≤ h(1 + 1e-3). The model is exact on planes (any slope, any
+//!   cutter), for a ball on cylinders and for a bull on its corner; [`measure_scallop`]
+//!   measures what is left against the part itself (3-D distance).
 //! - **No plunges into the void.** Passes end where the cutter stops touching the part
 //!   (located to 1e-5 mm) or at the boundary box; links follow the surface only when checked.
 //!
