@@ -709,7 +709,7 @@ mod tests {
         };
         let (mut lo, mut hi) = (-xm, xm);
         let g = (5f64.sqrt() - 1.0) / 2.0;
-        for _ in 0..200 {
+        for _ in 0..90 {
             let m1 = hi - g * (hi - lo);
             let m2 = lo + g * (hi - lo);
             if f(m1) <= f(m2) {
@@ -741,7 +741,7 @@ mod tests {
         let t_hi = (c0.0 + s * cs + rr) / sn;
         let (mut lo, mut hi) = (t_lo, t_hi);
         let g = (5f64.sqrt() - 1.0) / 2.0;
-        for _ in 0..200 {
+        for _ in 0..90 {
             let m1 = hi - g * (hi - lo);
             let m2 = lo + g * (hi - lo);
             if inside(m1) >= inside(m2) {
@@ -758,7 +758,7 @@ mod tests {
             return t_lo;
         }
         let (mut a, mut b) = (t_lo, t_max);
-        for _ in 0..200 {
+        for _ in 0..64 {
             let m = 0.5 * (a + b);
             if inside(m) >= 0.0 {
                 b = m;
@@ -782,7 +782,7 @@ mod tests {
         };
         let (mut lo, mut hi) = (-rr, rr);
         let g = (5f64.sqrt() - 1.0) / 2.0;
-        for _ in 0..200 {
+        for _ in 0..90 {
             let m1 = hi - g * (hi - lo);
             let m2 = lo + g * (hi - lo);
             if depth(m1) <= depth(m2) {
@@ -801,7 +801,7 @@ mod tests {
         // The contact is the minimum (0); the cusp where the rising right branch of the first
         // copy meets the falling left branch of the second.
         let (mut a, mut b) = (0.0, w);
-        for _ in 0..200 {
+        for _ in 0..64 {
             let m = 0.5 * (a + b);
             if low(m) < low(m - w) {
                 a = m;
