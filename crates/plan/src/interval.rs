@@ -149,11 +149,7 @@ pub(crate) fn model_at(
             slope = slope.max(((b.1 - a.1) / (b.0 - a.0)).abs());
         }
     }
-    let interval = |q: f64| {
-        rhos.iter()
-            .map(|&r| model.xy_interval(p, q, r))
-            .fold(f64::INFINITY, f64::min)
-    };
+    let interval = |q: f64| model.xy_interval_min(p, q, &rhos);
     let mut q = slope;
     let mut dv = interval(q);
     for _ in 0..4 {
@@ -174,6 +170,27 @@ pub(crate) fn model_at(
 
 /// Number of CL samples across the interval for the CL-space verification.
 const VERIFY_Q: usize = 32;
+
+/// A station of the CL-space verification: `u` (mm), the slope `p` along the pass there,
+/// and the cutter's outline seen along that motion (built once, used for every trial step).
+#[derive(Debug, Clone)]
+pub(crate) struct Probe {
+    u: f64,
+    p: f64,
+    outline: sidestep::SectionProfile,
+}
+
+impl Probe {
+    /// The probe at `u` on a pass whose slopes are `slopes`.
+    pub(crate) fn new(model: &sidestep::SideStepModel, slopes: &AlongSlopes, u: f64) -> Probe {
+        let p = slopes.at(u);
+        Probe {
+            u,
+            p,
+            outline: model.section(p),
+        }
+    }
+}
 
 /// One piece of the CL section's polyline in the verification: from `(q0, z0)` to `(q1, z1)`
 /// (`q0 = q1` for a lone sample), slope `s`, and the outline's offset `xs` from its tip to
@@ -198,7 +215,7 @@ struct Piece {
 /// the piece); the machined one is `E(y)`, the lower of the two passes' outlines. The
 /// scallop is the largest `(E − S*)·cos θ` between the two passes' contact points with S*,
 /// θ the slope of S*'s secant between them: a distance normal to the surface in that plane,
-/// which holds the surface normal. `E − S*` is evaluated on a grid of 401 points over the
+/// which holds the surface normal. `E − S*` is evaluated on a grid of 201 points over the
 /// outlines' span, 65 over the cusp region, and either side of every kink and jump of E
 /// (the outlines' rims and flat ends, the crossing of the two passes), then refined by
 /// ternary search about the largest. `None` if the cutter touches nothing at a pass.
@@ -206,16 +223,16 @@ pub(crate) fn cl_scallop(
     s: &dyn ClSurface,
     f: &Raster,
     model: &sidestep::SideStepModel,
-    u: f64,
-    p: f64,
+    probe: &Probe,
     v: f64,
     dv: f64,
 ) -> Option<f64> {
+    let Probe { u, p, outline } = probe;
+    let (u, p) = (*u, *p);
     let c = model.cutter();
     let (rr, a) = (c.radius(), c.major_radius());
     let ca = 1.0 / (1.0 + p * p).sqrt();
     let ca = if ca.is_finite() { ca } else { 1.0 };
-    let outline = model.section(p);
     let sil = model.silhouette(p);
     let z = |vv: f64| {
         let (x, y) = f.to_xy(u, vv);
@@ -276,7 +293,7 @@ pub(crate) fn cl_scallop(
     let eb = |y: f64| prof(y - v - dv).map(|hq| zb + hq);
     // Grid: the whole span, the cusp region (between the contacts of a line of the chord's
     // slope), and both sides of every kink and jump of E.
-    let n = 400;
+    let n = 200;
     let (y0, y1) = (v - rr, v + dv + rr);
     let mut ys: Vec<f64> = (0..=n)
         .map(|k| y0 + (y1 - y0) * k as f64 / n as f64)
@@ -460,7 +477,8 @@ mod tests {
             // section they lie below it by at most their sagitta, which can only raise the
             // scallop it reports.
             let sag = (dv / VERIFY_Q as f64).powi(2) / (8.0 * 23.0);
-            let sc = cl_scallop(&cyl, &f, &m, 0.0, 0.0, v, dv).unwrap();
+            let probe = Probe::new(&m, &AlongSlopes::default(), 0.0);
+            let sc = cl_scallop(&cyl, &f, &m, &probe, v, dv).unwrap();
             assert!(
                 sc >= 0.01 - 1e-9 && sc <= 0.01 + sag,
                 "v {v}: verified {sc}, sagitta {sag}"
@@ -480,7 +498,8 @@ mod tests {
         let m = sidestep::SideStepModel::new(bull, 0.01);
         let (dv, _) = model_at(&bc, &f, &m, (0.0, 30.0), 0.0, 0.0, 0.2);
         assert!(dv > 6.0, "{dv}");
-        let sc = cl_scallop(&bc, &f, &m, 0.0, 0.0, 0.0, dv).unwrap();
+        let probe = Probe::new(&m, &AlongSlopes::default(), 0.0);
+        let sc = cl_scallop(&bc, &f, &m, &probe, 0.0, dv).unwrap();
         assert!(sc > 0.1, "{dv} {sc}");
     }
 }

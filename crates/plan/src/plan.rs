@@ -182,6 +182,10 @@ pub fn plan(
         let sparse = verify_points(&prof, EVAL_SPACING_MM);
         let probes = verify_points(&prof, verify_spacing);
         let slopes = interval::AlongSlopes::new(&prof, cutter.corner_radius());
+        let probes: Vec<interval::Probe> = probes
+            .par_iter()
+            .map(|&(u, _)| interval::Probe::new(&model, &slopes, u))
+            .collect();
         let mut m = feed::march(prof, &chk);
         m.unresolved += unresolved;
         m.unresolved_dev = m.unresolved_dev.max(unresolved_dev);
@@ -202,9 +206,7 @@ pub fn plan(
         for _ in 0..12 {
             let worst = probes
                 .par_iter()
-                .filter_map(|&(u, _)| {
-                    interval::cl_scallop(surface, &frame, &model, u, slopes.at(u), v, dv)
-                })
+                .filter_map(|pr| interval::cl_scallop(surface, &frame, &model, pr, v, dv))
                 .reduce(|| 0.0, f64::max);
             verified_scallop = worst;
             if worst <= h * (1.0 + VERIFY_SLACK) || dv <= floor {

@@ -141,6 +141,39 @@ fn bisect(mut lo: f64, mut hi: f64, pred: impl Fn(f64) -> bool) -> f64 {
     hi
 }
 
+/// Root of `f` between `a`, where `f < 0`, and `b`, where `f ≥ 0` (`a` may exceed `b`), by
+/// Newton's method from `guess` on `f`'s value and derivative `(f, f')`, safeguarded by
+/// bisection of the bracket; to a relative step of 1e-15.
+fn newton(a: f64, b: f64, guess: f64, f: impl Fn(f64) -> (f64, f64)) -> f64 {
+    let (mut neg, mut pos) = (a, b);
+    let inside = |x: f64, p: f64, q: f64| x > p.min(q) && x < p.max(q);
+    let mut x = if inside(guess, a, b) {
+        guess
+    } else {
+        0.5 * (a + b)
+    };
+    for _ in 0..100 {
+        let (fx, dfx) = f(x);
+        if fx >= 0.0 {
+            pos = x;
+        } else {
+            neg = x;
+        }
+        if fx == 0.0 {
+            return x;
+        }
+        let mut nx = x - fx / dfx;
+        if !(nx.is_finite() && inside(nx, neg, pos)) {
+            nx = 0.5 * (neg + pos);
+        }
+        if (nx - x).abs() <= 1e-15 * (1.0 + x.abs()) || nx == neg || nx == pos {
+            return nx;
+        }
+        x = nx;
+    }
+    x
+}
+
 impl Silhouette {
     /// The outline of `cutter` seen along a motion inclined `alpha` radians (its sign does not
     /// matter; clamped to `[0, π/2]`, NaN counts as 0).
@@ -206,7 +239,8 @@ impl Silhouette {
     /// Uphill the outline is followed to its side `y = R` and up that side; downhill to its
     /// extreme point along the section (normal angle `θ − π/2`): beyond it the outline
     /// overhangs, and the cusp with the neighbouring copy forms there. `INFINITY` uphill when
-    /// the section is vertical (the side lies on it). Exact up to bisection to the last bit.
+    /// the section is vertical (the side lies on it). Closed form for a ball; otherwise
+    /// Newton's method on the normal angle (safeguarded by bisection) to a relative 1e-15.
     pub fn reach(&self, theta: f64, h: f64) -> (f64, f64) {
         if h.is_nan() || h <= 0.0 {
             return (0.0, 0.0);
@@ -216,15 +250,45 @@ impl Silhouette {
         } else {
             theta.abs().min(FRAC_PI_2)
         };
-        let x0 = self.point(th);
         let (sn, cs) = th.sin_cos();
-        // Height above the section line through the contact, and distance along it.
+        if self.a == 0.0 {
+            // A ball: a circle of radius R with its sides; the walk in closed form.
+            let rr = self.rr;
+            let d = if h < rr {
+                (2.0 * rr * h - h * h).sqrt()
+            } else {
+                rr
+            };
+            // Uphill the circle reaches its side at height R(1 − sin θ), then the side.
+            let h_side = rr * (1.0 - sn);
+            let dp = if h <= h_side {
+                d
+            } else if cs > 1e-12 {
+                rr * cs + (h - h_side) / cs * sn
+            } else {
+                f64::INFINITY
+            };
+            return (d, dp);
+        }
+        let x0 = self.point(th);
+        // Height above the section line through the contact, and distance along it; the
+        // height's derivative along the outline is its radius of curvature times sin(γ − θ).
         let height = |p: (f64, f64)| (x0.0 - p.0) * sn - (x0.1 - p.1) * cs;
         let along = |p: (f64, f64)| (p.0 - x0.0) * cs + (p.1 - x0.1) * sn;
+        let f = |g: f64| (height(self.point(g)) - h, self.radius(g) * (g - th).sin());
+        // First guess: the osculating circle at the contact.
+        let turn = {
+            let rc = self.radius(th);
+            if h < rc {
+                (1.0 - h / rc).acos()
+            } else {
+                FRAC_PI_2
+            }
+        };
         let side = self.point(FRAC_PI_2);
         let h_side = height(side);
         let dp = if h_side >= h {
-            along(self.point(bisect(th, FRAC_PI_2, |g| height(self.point(g)) >= h)))
+            along(self.point(newton(th, FRAC_PI_2, th + turn, f)))
         } else if cs > 1e-12 {
             along(side) + (h - h_side) / cs * sn
         } else {
@@ -232,27 +296,25 @@ impl Silhouette {
         };
         let g_end = th - FRAC_PI_2;
         let end = self.point(g_end);
-        let on_arc = |from: f64| {
-            let g = bisect(from, g_end, |g| height(self.point(g)) >= h);
-            -along(self.point(g))
-        };
+        let on_arc = |from: f64, guess: f64| -along(self.point(newton(from, g_end, guess, f)));
         let dm = if height(end) < h {
             -along(end)
-        } else if self.b == 0.0 && self.a > 0.0 && th > 0.0 {
+        } else if self.b == 0.0 && th > 0.0 {
             // α = 0: the flat bottom, a segment at normal angle 0 between the corner arcs.
             let z = self.zc - self.r;
             let (sr, sl) = ((self.a, z), (-self.a, z));
             let (hr, hl) = (height(sr), height(sl));
             if hr >= h {
-                on_arc(th)
+                on_arc(th, th - turn)
             } else if hl >= h {
                 let t = (h - hr) / (hl - hr);
                 -along((sr.0 + t * (sl.0 - sr.0), z))
             } else {
-                on_arc(-0.0)
+                // On the left corner arc, γ < 0 (γ = −0 would be the segment's middle).
+                on_arc(-f64::MIN_POSITIVE, 0.5 * g_end)
             }
         } else {
-            on_arc(th)
+            on_arc(th, th - turn)
         };
         (dm.max(0.0), dp.max(0.0))
     }
@@ -261,6 +323,7 @@ impl Silhouette {
     /// across from it, `None` for `|y| > R`. Closed form for a ball, for α = 0 (the axial
     /// profile) and for a flat end mill (the ellipse); bisection on the normal angle to the
     /// last bit for a bull moving on a slope.
+    #[inline]
     pub fn height_at(&self, y: f64) -> Option<f64> {
         let ya = y.abs();
         if ya.is_nan() || ya > self.rr {
@@ -312,14 +375,27 @@ impl SectionProfile {
 
     fn tabulate(sil: &Silhouette) -> Vec<f64> {
         let n = OUTLINE_NODES;
-        let mut gs: Vec<f64> = (0..=n)
-            .flat_map(|k| {
-                let t = k as f64 / n as f64 * FRAC_PI_2;
-                [t, (sil.b * t.sin()).atan2(sil.a * t.cos())]
-            })
+        // Normal angles uniform in themselves and in the ellipse parameter t (both sorted):
+        // merged.
+        let by_g: Vec<f64> = (0..=n).map(|k| k as f64 / n as f64 * FRAC_PI_2).collect();
+        let by_t: Vec<f64> = by_g
+            .iter()
+            .map(|&t| (sil.b * t.sin()).atan2(sil.a * t.cos()))
             .collect();
-        gs.sort_by(f64::total_cmp);
-        gs.dedup();
+        let mut gs = Vec::with_capacity(2 * n + 2);
+        let (mut i, mut j) = (0, 0);
+        while i <= n || j <= n {
+            let g = if j > n || (i <= n && by_g[i] <= by_t[j]) {
+                i += 1;
+                by_g[i - 1]
+            } else {
+                j += 1;
+                by_t[j - 1]
+            };
+            if gs.last().is_none_or(|&l| g > l) {
+                gs.push(g);
+            }
+        }
         let z0 = sil.lowest();
         let pts: Vec<(f64, f64)> = gs
             .iter()
@@ -350,6 +426,7 @@ impl SectionProfile {
 
     /// Height (mm) of the outline above its lowest point at `y` mm across, `None` for
     /// `|y| > R`.
+    #[inline]
     pub fn height(&self, y: f64) -> Option<f64> {
         if self.table.is_empty() {
             return self.sil.height_at(y);
@@ -362,7 +439,8 @@ impl SectionProfile {
         let m = TABLE_INTERVALS;
         let xi = 1.0 - (1.0 - ya / rr).max(0.0).sqrt();
         let x = xi * m as f64;
-        let k = (x.floor() as usize).min(m - 1);
+        // x ≥ 0: truncation is the floor.
+        let k = (x as usize).min(m - 1);
         let f = x - k as f64;
         Some(self.table[k] + f * (self.table[k + 1] - self.table[k]))
     }
@@ -418,23 +496,29 @@ impl SideStepModel {
         ((w / 2.0).powi(2) + h * h) / (2.0 * h)
     }
 
-    /// The circle (radius, mm) and part radius (mm) the curvature treatment uses at gradient
-    /// `(p, q)` and vertical-section radius `rho_cl`, and the section's slope θ: the effective
-    /// radius, or on a concave section it cannot sit in, the corner radius r.
-    fn circle(&self, p: f64, q: f64, rho_cl: f64) -> (f64, f64, f64) {
+    /// What the curvature treatment needs at gradient `(p, q)`, independent of the section's
+    /// radius: the effective radius, the outline's radius at the contact, and the section's
+    /// slope θ.
+    fn straight(&self, p: f64, q: f64) -> (f64, f64, f64) {
         let (alpha, theta) = section_angles(p, q);
         let sil = Silhouette::new(&self.cutter, alpha);
         let h = self.h;
         let (dm, dp) = sil.reach(theta, h);
         let w = (dm + dp).min(MAX_STEPOVER_FRACTION * self.cutter.diameter());
         let r_eff = ((w / 2.0).powi(2) + h * h) / (2.0 * h);
-        let rho = part_radius(section_radius(rho_cl, p, q), sil.radius(theta));
-        let r = if ball_step(r_eff, rho, h).is_none() && rho < 0.0 {
+        (r_eff, sil.radius(theta), theta)
+    }
+
+    /// The circle radius (mm) and the part's radius (mm) for vertical-section radius `rho_cl`:
+    /// the effective radius, or on a concave section it cannot sit in, the corner radius r.
+    fn circle(&self, (r_eff, r_c, _): (f64, f64, f64), p: f64, q: f64, rho_cl: f64) -> (f64, f64) {
+        let rho = part_radius(section_radius(rho_cl, p, q), r_c);
+        let r = if ball_step(r_eff, rho, self.h).is_none() && rho < 0.0 {
             self.cutter.corner_radius()
         } else {
             r_eff
         };
-        (r, rho, theta)
+        (r, rho)
     }
 
     /// The XY interval (mm) to the next pass at a CL point where the CL surface has gradient
@@ -451,10 +535,20 @@ impl SideStepModel {
     /// ball on cylinders; 0 when no step leaves h (a flat end mill on a concave section
     /// narrower than its effective circle).
     pub fn xy_interval(&self, p: f64, q: f64, rho_cl: f64) -> f64 {
-        let (r, rho, theta) = self.circle(p, q, rho_cl);
+        self.xy_interval_min(p, q, &[rho_cl])
+    }
+
+    /// The smallest [`SideStepModel::xy_interval`] (mm) over several vertical-section radii
+    /// `rhos` at the same gradient (the outline is walked once).
+    pub fn xy_interval_min(&self, p: f64, q: f64, rhos: &[f64]) -> f64 {
+        let st = self.straight(p, q);
         let cap = MAX_STEPOVER_FRACTION * self.cutter.diameter();
-        let w = ball_step(r, rho, self.h).map_or(0.0, |w| w.min(cap));
-        w * theta.cos()
+        rhos.iter()
+            .map(|&rho_cl| {
+                let (r, rho) = self.circle(st, p, q, rho_cl);
+                ball_step(r, rho, self.h).map_or(0.0, |w| w.min(cap)) * st.2.cos()
+            })
+            .fold(f64::INFINITY, f64::min)
     }
 
     /// Predicted cusp height (mm) when neighbouring passes are `dv` mm apart in XY at a CL
@@ -462,8 +556,9 @@ impl SideStepModel {
     /// [`SideStepModel::xy_interval`] (exactly h at its own interval below the cap; the
     /// circle's radius where the step does not fit it).
     pub fn predicted_scallop(&self, p: f64, q: f64, rho_cl: f64, dv: f64) -> f64 {
-        let (r, rho, theta) = self.circle(p, q, rho_cl);
-        let c = theta.cos();
+        let st = self.straight(p, q);
+        let (r, rho) = self.circle(st, p, q, rho_cl);
+        let c = st.2.cos();
         let w = if c > 1e-12 { dv / c } else { f64::INFINITY };
         ball_scallop(r, rho, w).unwrap_or(r)
     }
