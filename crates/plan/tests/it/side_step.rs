@@ -285,3 +285,35 @@ fn measurement_sees_a_gouge() {
     let r = measure_scallop(&part, &ball, &p.toolpath, &probe);
     cam_core::assert_near!(r.max_gouge_mm, 0.05, 1e-9);
 }
+
+/// The outline along the motion (tables, Newton walks, slopes along the pass, edge arcs) is
+/// evaluated in parallel: the plan must not depend on the number of threads.
+#[test]
+fn bull_on_a_slope_along_the_passes_same_plan_for_one_and_many_threads() {
+    let bull = Cutter::bull(6.0, 1.5).unwrap();
+    let s = Cylinder {
+        rho: 20.0,
+        cutter: bull,
+    };
+    let sampler = UniformSampler {
+        u_range: (-10.0, 10.0),
+        v_range: (-12.0, 12.0),
+        step_mm: 0.37,
+    };
+    let mut c = cfg(bull);
+    c.scallop_mm = 0.05;
+    // Passes at 30° to the cylinder's axis: its slope shows along the passes too.
+    c.angle_deg = 30.0;
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let four = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .unwrap();
+    let a = one.install(|| plan(&s, &sampler, &c, None).unwrap());
+    let b = four.install(|| plan(&s, &sampler, &c, None).unwrap());
+    assert!(a.passes > 5, "{} passes", a.passes);
+    assert_eq!(a, b);
+}
