@@ -231,6 +231,18 @@ impl Silhouette {
         }
     }
 
+    /// The outline's smallest radius of curvature (mm): `r + b²/a` (`r + a·sin²α`, at the
+    /// ellipse's ends; r when α = 0; R for a ball). Its sides and flat bottom are straight, so
+    /// (Blaschke's rolling theorem) a circle of this radius touching the outline anywhere
+    /// from inside lies inside the cutter's outline.
+    pub fn min_radius(&self) -> f64 {
+        if self.a > 0.0 {
+            self.r + self.b * self.b / self.a
+        } else {
+            self.r
+        }
+    }
+
     /// Along-surface distances `(d₋, d₊)` (mm) from the contact at which the outline, resting
     /// on a straight section of slope `theta` radians (clamped to `[0, π/2]`), rises `h` mm
     /// above it, measured normal to the section: downhill and uphill of the contact. Two
@@ -497,26 +509,30 @@ impl SideStepModel {
     }
 
     /// What the curvature treatment needs at gradient `(p, q)`, independent of the section's
-    /// radius: the effective radius, the outline's radius at the contact, and the section's
-    /// slope θ.
-    fn straight(&self, p: f64, q: f64) -> (f64, f64, f64) {
+    /// radius.
+    fn straight(&self, p: f64, q: f64) -> Straight {
         let (alpha, theta) = section_angles(p, q);
         let sil = Silhouette::new(&self.cutter, alpha);
         let h = self.h;
         let (dm, dp) = sil.reach(theta, h);
         let w = (dm + dp).min(MAX_STEPOVER_FRACTION * self.cutter.diameter());
-        let r_eff = ((w / 2.0).powi(2) + h * h) / (2.0 * h);
-        (r_eff, sil.radius(theta), theta)
+        Straight {
+            r_eff: ((w / 2.0).powi(2) + h * h) / (2.0 * h),
+            r_c: sil.radius(theta),
+            r_in: sil.min_radius(),
+            theta,
+        }
     }
 
     /// The circle radius (mm) and the part's radius (mm) for vertical-section radius `rho_cl`:
-    /// the effective radius, or on a concave section it cannot sit in, the corner radius r.
-    fn circle(&self, (r_eff, r_c, _): (f64, f64, f64), p: f64, q: f64, rho_cl: f64) -> (f64, f64) {
-        let rho = part_radius(section_radius(rho_cl, p, q), r_c);
-        let r = if ball_step(r_eff, rho, self.h).is_none() && rho < 0.0 {
-            self.cutter.corner_radius()
+    /// the effective radius, or on a concave section it cannot sit in, the outline's
+    /// smallest radius.
+    fn circle(&self, st: &Straight, p: f64, q: f64, rho_cl: f64) -> (f64, f64) {
+        let rho = part_radius(section_radius(rho_cl, p, q), st.r_c);
+        let r = if ball_step(st.r_eff, rho, self.h).is_none() && rho < 0.0 {
+            st.r_in
         } else {
-            r_eff
+            st.r_eff
         };
         (r, rho)
     }
@@ -529,11 +545,11 @@ impl SideStepModel {
     /// outline's [`Silhouette::radius`] at the contact), capped at [`MAX_STEPOVER_FRACTION`]·D.
     /// On a concave section tighter than the effective circle (a bull's flat bottom across a
     /// valley, or a concave crease of the CL surface such as the foot of a boss), [`ball_step`]
-    /// of the corner radius r instead: conservative, since the outline's radius of curvature
-    /// is nowhere below r, so the corner circle touching where the cutter touches lies inside
-    /// the cutter and leaves a cusp at least as high. Exact on straight sections and for a
-    /// ball on cylinders; 0 when no step leaves h (a flat end mill on a concave section
-    /// narrower than its effective circle).
+    /// of the outline's smallest radius instead ([`Silhouette::min_radius`], the corner
+    /// radius r when α = 0): conservative, since that circle touching where the cutter
+    /// touches lies inside the cutter and leaves a cusp at least as high. Exact on straight
+    /// sections and for a ball on cylinders; 0 when no step leaves h (a flat end mill moving
+    /// level on a concave section narrower than its effective circle).
     pub fn xy_interval(&self, p: f64, q: f64, rho_cl: f64) -> f64 {
         self.xy_interval_min(p, q, &[rho_cl])
     }
@@ -545,8 +561,8 @@ impl SideStepModel {
         let cap = MAX_STEPOVER_FRACTION * self.cutter.diameter();
         rhos.iter()
             .map(|&rho_cl| {
-                let (r, rho) = self.circle(st, p, q, rho_cl);
-                ball_step(r, rho, self.h).map_or(0.0, |w| w.min(cap)) * st.2.cos()
+                let (r, rho) = self.circle(&st, p, q, rho_cl);
+                ball_step(r, rho, self.h).map_or(0.0, |w| w.min(cap)) * st.theta.cos()
             })
             .fold(f64::INFINITY, f64::min)
     }
@@ -557,8 +573,8 @@ impl SideStepModel {
     /// circle's radius where the step does not fit it).
     pub fn predicted_scallop(&self, p: f64, q: f64, rho_cl: f64, dv: f64) -> f64 {
         let st = self.straight(p, q);
-        let (r, rho) = self.circle(st, p, q, rho_cl);
-        let c = st.2.cos();
+        let (r, rho) = self.circle(&st, p, q, rho_cl);
+        let c = st.theta.cos();
         let w = if c > 1e-12 { dv / c } else { f64::INFINITY };
         ball_scallop(r, rho, w).unwrap_or(r)
     }
@@ -575,6 +591,16 @@ impl SideStepModel {
     pub fn section(&self, p: f64) -> SectionProfile {
         SectionProfile::new(self.silhouette(p))
     }
+}
+
+/// [`SideStepModel`]'s straight-section results at one gradient: the effective radius, the
+/// outline's radius at the contact and its smallest radius (mm), and the section's slope θ.
+#[derive(Debug, Clone, Copy)]
+struct Straight {
+    r_eff: f64,
+    r_c: f64,
+    r_in: f64,
+    theta: f64,
 }
 
 /// The part's signed radius (mm) in the section from the CL section's `rho_s` and the
@@ -1023,11 +1049,30 @@ mod tests {
         let want = ball_step(1.5, -5.0 - 1.5, 0.05).unwrap();
         cam_core::assert_near!(m.xy_interval(0.0, 0.0, -5.0), want, 1e-12);
         cam_core::assert_near!(m.predicted_scallop(0.0, 0.0, -5.0, want), 0.05, 1e-12);
-        // A flat end mill has no corner: no step fits.
-        assert_eq!(
-            SideStepModel::new(flat(), 0.05).xy_interval(0.0, 0.0, -5.0),
-            0.0
-        );
+        // A flat end mill moving level has no corner: no step fits. Moving on a slope α its
+        // outline's smallest radius is R sin²α.
+        let fm = SideStepModel::new(flat(), 0.05);
+        assert_eq!(fm.xy_interval(0.0, 0.0, -5.0), 0.0);
+        let (p, al) = (1.0, std::f64::consts::FRAC_PI_4);
+        cam_core::assert_near!(fm.silhouette(p).min_radius(), 3.0 * al.sin().powi(2), 1e-12);
+        assert!(fm.xy_interval(p, 0.0, -0.1) > 0.0);
+    }
+
+    /// The outline's radius of curvature is nowhere below its smallest radius (the premise of
+    /// the concave fallback), which it takes at its ends.
+    #[test]
+    fn outline_radius_is_never_below_its_smallest() {
+        for c in [ball(), bull(), flat(), Cutter::bull(10.0, 0.5).unwrap()] {
+            for ad in [0.0f64, 3.0, 20.0, 60.0, 90.0] {
+                let sil = Silhouette::new(&c, ad.to_radians());
+                let m = sil.min_radius();
+                for k in -100..=100 {
+                    let g = k as f64 / 100.0 * FRAC_PI_2;
+                    assert!(sil.radius(g) >= m * (1.0 - 1e-12), "{c} {ad}° γ {g}");
+                }
+                cam_core::assert_near!(sil.radius(FRAC_PI_2), m, 1e-12 * m.max(1.0));
+            }
+        }
     }
 
     #[test]
