@@ -19,14 +19,22 @@
 //!   CL surface; the dip and plane bounds need a [`ClSurface`] that certifies (the
 //!   drop-cutter of a mesh does). Flat end mills (no corner radius) and surfaces without
 //!   certificates fall back to midpoint tests for what those bounds cannot give (a sampling
-//!   argument; such moves are counted in [`Plan::sampled_moves`]). Vertical walls of the CL surface that cannot be resolved above
-//!   1e-5 mm are counted in [`Plan::unresolved_joins`].
-//! - **Side step.** The interval after each pass is the minimum, over both passes' samples
-//!   and points 1 mm apart, of the model's scallop-limited interval (re-derived Eq. 2 with the
-//!   cutter's effective radius, the curvature through three passes, and the slope of the chord
-//!   to the next pass: ε·cos θ); where the curvature is a crease the scallop is measured with
-//!   drops between the passes. The model is exact for a ball on cylinders and planes;
-//!   [`measure_scallop`] measures what is left against the part itself.
+//!   argument; such moves are counted in [`Plan::sampled_moves`]). Vertical walls of the CL
+//!   surface that cannot be resolved above 1e-5 mm are counted in [`Plan::unresolved_joins`].
+//! - **Side step.** The scallop forms in the plane perpendicular to the motion along the pass,
+//!   where the cutter shows its outline seen along that motion ([`sidestep::Silhouette`]:
+//!   its axial profile only on level motion). The interval after each pass is the minimum,
+//!   over both passes' samples and points 1 mm apart, of the model's scallop-limited
+//!   interval (the outline's exact step on a straight section, re-derived Eq. 2 with the
+//!   resulting effective radius and the curvature through three passes, and the slope of the
+//!   chord to the next pass: ε·cos θ, the seed's Algorithm 2 against the next pass's exact
+//!   profile); where that curvature may be a crease of the CL surface the scallop is measured
+//!   with drops between the passes. Flat and bull cutters are then verified in CL space at
+//!   points every 2R along the pass (the cusp between the two passes against the best surface
+//!   the cutter can leave, from the CL surface alone) and shrunk until that holds. The model
+//!   is exact on planes (any slope, any cutter), for a ball on cylinders and for a bull on
+//!   its corner; [`measure_scallop`] measures what is left against the part itself (3-D
+//!   distance).
 //! - **No plunges into the void.** Passes end where the cutter stops touching the part
 //!   (located to 1e-5 mm) or at the boundary box; links follow the surface only when the same
 //!   bounds prove them.

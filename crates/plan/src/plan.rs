@@ -206,7 +206,7 @@ fn plan_passes(
         Pass { v, prof, marched }
     };
     // The first interval's curvature needs a pass behind the first one.
-    let w0 = model.xy_interval(f64::INFINITY, 0.0);
+    let w0 = model.xy_interval(0.0, 0.0, f64::INFINITY);
     let mut behind: Option<Pass> = Some(build(v_lo - w0.min(0.5 * w_ref).max(floor), &mut drops));
     let mut cur = build(v_lo, &mut drops);
     let mut dv_prev = cur.v - behind.as_ref().map_or(cur.v, |b| b.v);
@@ -237,6 +237,7 @@ fn plan_passes(
         // one may not), so shrink by the model's own estimate (at least 0.5 %) until a
         // candidate holds; the prediction grows at most twofold per pass, so passes
         // approaching a feature across flat ground do not creep towards it.
+        let slopes = interval::AlongSlopes::new(&cur.prof, cutter.corner_radius());
         let mut dv = dv_pred.max(floor).min(v_hi - v);
         let mut good: Option<(f64, Pass, interval::Need)> = None;
         let mut tries = 0;
@@ -248,7 +249,7 @@ fn plan_passes(
                 v,
                 &model,
                 behind.as_ref().map(|b| (&b.prof, dv_prev)),
-                &cur.prof,
+                (&cur.prof, &slopes),
                 &cand.prof,
                 dv,
                 floor,
@@ -286,7 +287,7 @@ fn plan_passes(
                     v,
                     &model,
                     behind.as_ref().map(|b| (&b.prof, dv_prev)),
-                    &cur.prof,
+                    (&cur.prof, &slopes),
                     &cand.prof,
                     dv,
                     floor,
@@ -299,11 +300,14 @@ fn plan_passes(
         // model cannot see the part under a CL plateau); shrink until it holds.
         let mut verified_scallop = 0.0f64;
         if cutter.kind() != cam_core::CutterKind::Ball {
-            let probes = verify_points(&cur.prof, verify_spacing);
+            let probes: Vec<interval::Probe> = verify_points(&cur.prof, verify_spacing)
+                .par_iter()
+                .map(|&(u, _)| interval::Probe::new(&model, &slopes, u))
+                .collect();
             for _ in 0..12 {
                 let worst = probes
                     .par_iter()
-                    .filter_map(|&(u, _)| interval::cl_scallop(surface, &frame, cfg, u, v, dv))
+                    .filter_map(|pr| interval::cl_scallop(surface, &frame, &model, pr, v, dv))
                     .reduce(|| 0.0, f64::max);
                 drops += probes.len() * (interval::VERIFY_Q + 1);
                 verified_scallop = worst;
@@ -318,7 +322,7 @@ fn plan_passes(
                     v,
                     &model,
                     behind.as_ref().map(|b| (&b.prof, dv_prev)),
-                    &cur.prof,
+                    (&cur.prof, &slopes),
                     &next.prof,
                     dv,
                     floor,
@@ -328,7 +332,7 @@ fn plan_passes(
         let predicted = need
             .evals
             .iter()
-            .map(|&(rho, th)| model.predicted_scallop(rho, th, dv))
+            .map(|&(p, q, rho)| model.predicted_scallop(p, q, rho, dv))
             .fold(0.0, f64::max)
             .max(verified_scallop)
             .max(need.crease_scallop);

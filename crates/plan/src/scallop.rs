@@ -1,5 +1,5 @@
 //! Independent measurement of the material a toolpath leaves: the cutter's swept lower
-//! surface in cross-sections across the passes, against the part's section.
+//! surface sampled in cross-sections across the passes, and its 3-D distance to the part.
 
 use cam_core::{Cutter, MoveKind, Toolpath};
 
@@ -21,8 +21,9 @@ pub struct ScallopProbe {
 /// What [`measure_scallop`] found.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct ScallopReport {
-    /// Largest thickness (mm) of material left above the part, measured in the cross-section
-    /// as the distance from the swept surface down to the part's section (≈ normal height).
+    /// Largest thickness (mm) of material left above the part: the 3-D distance from a point
+    /// of the swept surface to the nearest point of the part (so along the part's normal
+    /// there), largest over the cusps found in the cross-sections.
     pub max_scallop_mm: f64,
     /// XY (mm) of the worst sample.
     pub at_xy: (f64, f64),
@@ -86,11 +87,84 @@ fn swept_low(
     Some(f(0.5 * (lo + hi)).min(f(t0)).min(f(t1)))
 }
 
+/// Distance (mm) from `x` to the nearest point of the part's surface `(x', y', part(x', y'))`
+/// found by a pattern search (8 directions, step halved down to 1e-11 mm) from the best of
+/// `seeds` (XY points). Always the distance to a point of the part, so never below the true
+/// distance; it is the true distance where the part is smooth and `x` is closer to it than
+/// its radius of curvature (the nearest point is then a local minimum reached from a seed
+/// near it).
+fn distance_to_part(
+    part: &(dyn Fn(f64, f64) -> Option<f64> + Sync),
+    x: (f64, f64, f64),
+    seeds: &[(f64, f64)],
+) -> Option<f64> {
+    let d = |q: (f64, f64)| {
+        part(q.0, q.1)
+            .map(|z| ((q.0 - x.0).powi(2) + (q.1 - x.1).powi(2) + (z - x.2).powi(2)).sqrt())
+    };
+    let mut best: Option<((f64, f64), f64)> = None;
+    for &q in seeds {
+        if let Some(dq) = d(q)
+            && best.is_none_or(|b| dq < b.1)
+        {
+            best = Some((q, dq));
+        }
+    }
+    let (mut at, mut dist) = best?;
+    let mut step = (0.5 * dist).max(1e-6);
+    let dirs = [
+        (1.0, 0.0),
+        (-1.0, 0.0),
+        (0.0, 1.0),
+        (0.0, -1.0),
+        (
+            std::f64::consts::FRAC_1_SQRT_2,
+            std::f64::consts::FRAC_1_SQRT_2,
+        ),
+        (
+            -std::f64::consts::FRAC_1_SQRT_2,
+            std::f64::consts::FRAC_1_SQRT_2,
+        ),
+        (
+            std::f64::consts::FRAC_1_SQRT_2,
+            -std::f64::consts::FRAC_1_SQRT_2,
+        ),
+        (
+            -std::f64::consts::FRAC_1_SQRT_2,
+            -std::f64::consts::FRAC_1_SQRT_2,
+        ),
+    ];
+    let mut evals = 0;
+    while step > 1e-11 && evals < 20_000 {
+        let mut moved = false;
+        for (dx, dy) in dirs {
+            let q = (at.0 + step * dx, at.1 + step * dy);
+            evals += 1;
+            if let Some(dq) = d(q)
+                && dq < dist
+            {
+                (at, dist) = (q, dq);
+                moved = true;
+            }
+        }
+        if !moved {
+            step *= 0.5;
+        }
+    }
+    Some(dist)
+}
+
 /// Measures the scallop (and any gouge) left by the cut moves of `toolpath` over the part
 /// whose top surface is `part(x, y)` (mm; `None` off the part), in the cross-sections of
 /// `probe`. Independent of the planner: it sweeps the cutter's exact lower profile along the
-/// actual moves. The thickness at a sample is the 2-D distance in the cross-section from the
-/// swept surface down to the part's sampled section (a polyline at the same spacing).
+/// actual moves. In each cross-section the swept surface is sampled every `dv_mm`; where its
+/// distance within the section down to the part's sampled section (a polyline) peaks (the
+/// cusps), the peak is located by ternary search and the swept point's 3-D distance to the
+/// part is measured ([`ScallopReport::max_scallop_mm`]): normal to the part, also where the
+/// part slopes along the passes (where the in-section distance is longer by about
+/// 1/cos α). Cusps are measured in decreasing order of their in-section distance while that
+/// (an upper bound of the 3-D one, to the polyline's sagitta) can still exceed the largest
+/// found.
 pub fn measure_scallop(
     part: &(dyn Fn(f64, f64) -> Option<f64> + Sync),
     cutter: &Cutter,
@@ -139,29 +213,33 @@ pub fn measure_scallop(
                     .reduce(f64::min)
             };
             let swept: Vec<Option<f64>> = vs.iter().map(|&v| swept_at(v)).collect();
-            // Thickness at (v, e): distance in the section down to the part's polyline near v.
-            let thick = |v: f64, e: f64| -> Option<f64> {
+            // Thickness at (v, e) within the section: distance down to the part's polyline
+            // near v, and the v of the nearest polyline point.
+            let thick = |v: f64, e: f64| -> Option<(f64, f64)> {
                 let k = (((v - v0) / (v1 - v0).max(1e-300)) * n as f64)
                     .round()
                     .clamp(0.0, n as f64) as usize;
                 let sz = part_z[k]?;
                 let reach = (e - sz).max(0.0) + probe.dv_mm;
-                let mut best = f64::INFINITY;
+                let mut best: Option<(f64, f64)> = None;
                 let span = (reach / probe.dv_mm).ceil() as usize + 1;
                 let lo = k.saturating_sub(span);
                 let hi = (k + span).min(vs.len() - 1);
                 for j in lo..hi {
                     if let (Some(z0), Some(z1)) = (part_z[j], part_z[j + 1]) {
-                        let d = seg_dist((v, e), (vs[j], z0), (vs[j + 1], z1));
+                        let (d, t) = seg_dist((v, e), (vs[j], z0), (vs[j + 1], z1));
                         // Below the part's polyline counts as zero thickness (a gouge).
                         let below = e < z0
                             + (z1 - z0) * ((v - vs[j]) / (vs[j + 1] - vs[j])).clamp(0.0, 1.0)
                             && v >= vs[j]
                             && v <= vs[j + 1];
-                        best = best.min(if below { 0.0 } else { d });
+                        let d = if below { 0.0 } else { d };
+                        if best.is_none_or(|b| d < b.0) {
+                            best = Some((d, vs[j] + t * (vs[j + 1] - vs[j])));
+                        }
                     }
                 }
-                best.is_finite().then_some(best)
+                best
             };
             let mut rep = ScallopReport {
                 max_scallop_mm: 0.0,
@@ -169,7 +247,7 @@ pub fn measure_scallop(
                 max_gouge_mm: 0.0,
                 samples: 0,
             };
-            let mut best_k = None;
+            let mut t2 = vec![0.0f64; vs.len()];
             for k in 0..vs.len() {
                 let (Some(e), Some(sz)) = (swept[k], part_z[k]) else {
                     continue;
@@ -179,32 +257,62 @@ pub fn measure_scallop(
                     rep.max_gouge_mm = rep.max_gouge_mm.max(sz - e);
                     continue;
                 }
-                if let Some(t) = thick(vs[k], e)
-                    && t > rep.max_scallop_mm
-                {
-                    rep.max_scallop_mm = t;
-                    rep.at_xy = f.to_xy(u, vs[k]);
-                    best_k = Some(k);
+                if let Some((t, _)) = thick(vs[k], e) {
+                    t2[k] = t;
                 }
             }
-            // Refine the worst sample: the thickness is unimodal about a cusp.
-            if let Some(k) = best_k {
-                let g = |v: f64| swept_at(v).and_then(|e| thick(v, e)).unwrap_or(0.0);
+            // Cusps: local maxima of the in-section thickness, largest first.
+            let mut peaks: Vec<usize> = (0..vs.len())
+                .filter(|&k| {
+                    t2[k] > 0.0
+                        && (k == 0 || t2[k] >= t2[k - 1])
+                        && (k + 1 == vs.len() || t2[k] >= t2[k + 1])
+                })
+                .collect();
+            peaks.sort_by(|&a, &b| t2[b].total_cmp(&t2[a]).then(a.cmp(&b)));
+            // A sample is within about slope·dv/2 of its cusp, and the polyline within its
+            // sagitta of the section: a cusp whose sample is more than dv below the largest
+            // 3-D distance found cannot exceed it.
+            let slack = probe.dv_mm;
+            let g = |v: f64| swept_at(v).and_then(|e| thick(v, e)).map_or(0.0, |t| t.0);
+            for &k in peaks.iter().take(MAX_CUSPS) {
+                if t2[k] + slack < rep.max_scallop_mm {
+                    break;
+                }
+                // Locate the cusp: the in-section thickness is unimodal about it. Keep the
+                // best point evaluated: at a flat end mill's saw-tooth the cusp is the top of
+                // a jump of the swept surface, approached but not attained.
                 let (mut lo, mut hi) = (vs[k.saturating_sub(1)], vs[(k + 1).min(n)]);
+                let mut top = (t2[k], vs[k]);
                 for _ in 0..80 {
                     let m1 = lo + (hi - lo) / 3.0;
                     let m2 = hi - (hi - lo) / 3.0;
-                    if g(m1) < g(m2) {
+                    let (g1, g2) = (g(m1), g(m2));
+                    for c in [(g1, m1), (g2, m2)] {
+                        if c.0 > top.0 {
+                            top = c;
+                        }
+                    }
+                    if g1 < g2 {
                         lo = m1;
                     } else {
                         hi = m2;
                     }
                 }
-                let vm = 0.5 * (lo + hi);
-                let t = g(vm);
-                if t > rep.max_scallop_mm {
-                    rep.max_scallop_mm = t;
-                    rep.at_xy = f.to_xy(u, vm);
+                for vm in [top.1, vs[k]] {
+                    let Some(e) = swept_at(vm) else { continue };
+                    let Some((_, foot)) = thick(vm, e) else {
+                        continue;
+                    };
+                    let (x, y) = f.to_xy(u, vm);
+                    let seeds = [(x, y), f.to_xy(u, foot)];
+                    if let Some(t) = distance_to_part(part, (x, y, e), &seeds)
+                        && t > rep.max_scallop_mm
+                        && part(x, y).is_some_and(|z| e >= z)
+                    {
+                        rep.max_scallop_mm = t;
+                        rep.at_xy = (x, y);
+                    }
                 }
             }
             rep
@@ -230,7 +338,11 @@ pub fn measure_scallop(
     )
 }
 
-fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+/// Most cusps measured in 3-D per cross-section.
+const MAX_CUSPS: usize = 512;
+
+/// Distance from `p` to the segment `a b`, and the segment parameter of the nearest point.
+fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> (f64, f64) {
     let (dx, dy) = (b.0 - a.0, b.1 - a.1);
     let l2 = dx * dx + dy * dy;
     let t = if l2 > 0.0 {
@@ -239,5 +351,5 @@ fn seg_dist(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
         0.0
     };
     let (qx, qy) = (a.0 + t * dx, a.1 + t * dy);
-    ((p.0 - qx).powi(2) + (p.1 - qy).powi(2)).sqrt()
+    (((p.0 - qx).powi(2) + (p.1 - qy).powi(2)).sqrt(), t)
 }

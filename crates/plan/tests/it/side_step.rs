@@ -1,10 +1,10 @@
 //! Side step: the scallop left, measured independently, against the analytic value.
 
 use cam_core::Cutter;
-use cam_plan::sidestep::{ball_scallop, ball_step, effective_radius, flat_surface_reach};
+use cam_plan::sidestep::{SideStepModel, Silhouette, ball_scallop, ball_step};
 use cam_plan::{Plan, ScallopProbe, UniformSampler, measure_scallop, plan};
 
-use crate::surfaces::{Analytic, Cylinder, Tilted, Trough, cfg};
+use crate::surfaces::{Analytic, Cylinder, Plane, Tilted, Trough, cfg};
 
 fn run(s: &dyn Analytic, cutter: Cutter, v: (f64, f64)) -> Plan {
     let sampler = UniformSampler {
@@ -24,10 +24,22 @@ fn measured_between(
     k: usize,
     cc: &dyn Fn(f64) -> f64,
 ) -> f64 {
+    measured_at(s, cutter, p, k, cc, &[2.5, 5.0, 7.5])
+}
+
+/// [`measured_between`] at the given stations `u`.
+fn measured_at(
+    s: &dyn Analytic,
+    cutter: &Cutter,
+    p: &Plan,
+    k: usize,
+    cc: &dyn Fn(f64) -> f64,
+    stations: &[f64],
+) -> f64 {
     let (a, b) = (cc(p.pass_v_mm[k]), cc(p.pass_v_mm[k + 1]));
     let probe = ScallopProbe {
         angle_deg: 0.0,
-        stations_u: vec![2.5, 5.0, 7.5],
+        stations_u: stations.to_vec(),
         v_range: (a.min(b), a.max(b)),
         dv_mm: 1e-3,
     };
@@ -112,29 +124,30 @@ fn steep_slope_shrinks_the_step_by_cos_theta() {
 fn bull_on_slope_uses_corner_radius_and_leaves_h() {
     let bull = Cutter::bull(10.0, 2.0).unwrap();
     let theta = 30f64.to_radians();
-    cam_core::assert_near!(effective_radius(&bull, theta, 0.01), 2.0, 1e-5);
+    let model = SideStepModel::new(bull, 0.01);
+    cam_core::assert_near!(model.effective_radius(0.0, theta.tan()), 2.0, 1e-9);
     let s = Tilted {
         m: theta.tan(),
         cutter: bull,
     };
     let p = run(&s, bull, (0.0, 2.0));
     let w = 2.0 * (2.0 * 2.0 * 0.01 - 1e-4f64).sqrt();
-    cam_core::assert_near!(p.pass_v_mm[1] - p.pass_v_mm[0], w * theta.cos(), 1e-5);
+    cam_core::assert_near!(p.pass_v_mm[1] - p.pass_v_mm[0], w * theta.cos(), 1e-12);
     let h = measured_between(&s, &bull, &p, 1, &|v| v + 3.0 + 2.0 * theta.sin());
-    cam_core::assert_near!(h, 0.01, 1e-6);
+    cam_core::assert_near!(h, 0.01, 1e-8);
 }
 
 #[test]
 fn bull_and_flat_effective_radius_on_flat_ground() {
     let (h, bull) = (0.01, Cutter::bull(10.0, 2.0).unwrap());
-    let (dm, dp) = flat_surface_reach(&bull, 0.0, h);
+    let (dm, dp) = Silhouette::new(&bull, 0.0).reach(0.0, h);
     let want = 3.0 + (2.0 * 2.0 * h - h * h).sqrt();
     cam_core::assert_near!(dm + dp, 2.0 * want, 1e-6);
     let w: f64 = 2.0 * want;
     cam_core::assert_near!(
-        effective_radius(&bull, 0.0, h),
+        SideStepModel::new(bull, h).effective_radius(0.0, 0.0),
         ((w / 2.0).powi(2) + h * h) / (2.0 * h),
-        1e-3
+        1e-9
     );
     // Bull on flat ground: the measured scallop is h at the wider step.
     let s = Tilted {
@@ -148,7 +161,7 @@ fn bull_and_flat_effective_radius_on_flat_ground() {
     // Flat end mill on a 30° slope: a saw-tooth, w = h / (sin θ cos θ).
     let flat = Cutter::flat(10.0).unwrap();
     let th = 30f64.to_radians();
-    let (dm, dp) = flat_surface_reach(&flat, th, h);
+    let (dm, dp) = Silhouette::new(&flat, 0.0).reach(th, h);
     cam_core::assert_near!(dm + dp, h / (th.sin() * th.cos()), 1e-6);
     let s = Tilted {
         m: th.tan(),
@@ -157,6 +170,48 @@ fn bull_and_flat_effective_radius_on_flat_ground() {
     let p = run(&s, flat, (0.0, 0.3));
     let got = measured_between(&s, &flat, &p, 1, &|v| v + 5.0);
     cam_core::assert_near!(got, h, 1e-6, "flat on slope");
+}
+
+/// Planes sloping along the passes (and across them): the scallop forms in the plane
+/// perpendicular to the motion, where the cutter shows its outline seen along the motion
+/// (bull: radius r + a / sin α at the contact, flat: R / sin α), not its axial profile.
+/// The interval is the model's (exact on a plane, no shrinking by the CL-space check), and
+/// the scallop measured independently (swept cutter against the part, 3-D distance) is h.
+#[test]
+fn planes_sloping_along_the_passes_leave_h() {
+    let h = 0.01;
+    for spec in ["bull:6:1.5", "flat:6", "bull:10:2", "ball:6"] {
+        let cutter: Cutter = spec.parse().unwrap();
+        let model = SideStepModel::new(cutter, h);
+        for (along, across) in [(20.0f64, 0.0f64), (20.0, 15.0), (40.0, 30.0), (5.0, 0.0)] {
+            let (mx, my) = (along.to_radians().tan(), across.to_radians().tan());
+            let s = Plane { mx, my, cutter };
+            let dv = model.xy_interval(mx, my, f64::INFINITY);
+            // Three passes at least, whatever the step.
+            let p = run(&s, cutter, (0.0, 2.5 * dv));
+            assert!(
+                p.passes >= 3,
+                "{spec} {along}°/{across}°: {} passes",
+                p.passes
+            );
+            let step = p.pass_v_mm[1] - p.pass_v_mm[0];
+            cam_core::assert_near!(step, dv, 1e-12, "{spec} {along}°/{across}°");
+            // Stations where the swept surface is that of the passes' interior: more than R
+            // (a flat end mill's reach uphill from its tip) from where the passes start.
+            let off = s.contact_offset().1;
+            let got = measured_at(&s, &cutter, &p, 0, &|v| v + off, &[5.5, 6.5, 7.5]);
+            eprintln!(
+                "plane {spec} along {along}° across {across}°: step {step:.6} mm \
+                 (level ground {:.6}), measured scallop {got:.10} mm, h {h}",
+                model.xy_interval(0.0, 0.0, f64::INFINITY)
+            );
+            assert!(
+                got <= h * (1.0 + 1e-6) && got >= 0.9 * h,
+                "{spec} along {along}° across {across}°: measured {got}"
+            );
+            cam_core::assert_near!(got, h, 1e-8, "{spec} along {along}° across {across}°");
+        }
+    }
 }
 
 #[test]
@@ -229,4 +284,36 @@ fn measurement_sees_a_gouge() {
     let part = |x: f64, y: f64| s.part(x, y);
     let r = measure_scallop(&part, &ball, &p.toolpath, &probe);
     cam_core::assert_near!(r.max_gouge_mm, 0.05, 1e-9);
+}
+
+/// The outline along the motion (tables, Newton walks, slopes along the pass, edge arcs) is
+/// evaluated in parallel: the plan must not depend on the number of threads.
+#[test]
+fn bull_on_a_slope_along_the_passes_same_plan_for_one_and_many_threads() {
+    let bull = Cutter::bull(6.0, 1.5).unwrap();
+    let s = Cylinder {
+        rho: 20.0,
+        cutter: bull,
+    };
+    let sampler = UniformSampler {
+        u_range: (-10.0, 10.0),
+        v_range: (-12.0, 12.0),
+        step_mm: 0.37,
+    };
+    let mut c = cfg(bull);
+    c.scallop_mm = 0.05;
+    // Passes at 30° to the cylinder's axis: its slope shows along the passes too.
+    c.angle_deg = 30.0;
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let four = rayon::ThreadPoolBuilder::new()
+        .num_threads(4)
+        .build()
+        .unwrap();
+    let a = one.install(|| plan(&s, &sampler, &c, None).unwrap());
+    let b = four.install(|| plan(&s, &sampler, &c, None).unwrap());
+    assert!(a.passes > 5, "{} passes", a.passes);
+    assert_eq!(a, b);
 }

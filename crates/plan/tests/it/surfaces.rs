@@ -31,6 +31,39 @@ impl Analytic for Tilted {
     }
 }
 
+/// Plane z = mx·x + my·y, sloping along the passes (x) and across them (y). A torus cutter
+/// rests on it at the corner point down the steepest slope g = |(mx, my)|, so the tip is
+/// `a·g + r·(sqrt(1 + g²) − 1)` above the plane at the tip's XY; the contact lies
+/// `a + r·g / sqrt(1 + g²)` from the axis up the slope.
+pub struct Plane {
+    pub mx: f64,
+    pub my: f64,
+    pub cutter: Cutter,
+}
+impl Plane {
+    /// XY offset (mm) from the tip to the contact point.
+    pub fn contact_offset(&self) -> (f64, f64) {
+        let g = self.mx.hypot(self.my);
+        if g == 0.0 {
+            return (0.0, 0.0);
+        }
+        let d = self.cutter.major_radius() + self.cutter.corner_radius() * g / (1.0 + g * g).sqrt();
+        (d * self.mx / g, d * self.my / g)
+    }
+}
+impl ClSurface for Plane {
+    fn z_tip(&self, x: f64, y: f64) -> Option<f64> {
+        let (r, a) = (self.cutter.corner_radius(), self.cutter.major_radius());
+        let g = self.mx.hypot(self.my);
+        Some(self.mx * x + self.my * y + a * g + r * ((1.0 + g * g).sqrt() - 1.0))
+    }
+}
+impl Analytic for Plane {
+    fn part(&self, x: f64, y: f64) -> Option<f64> {
+        Some(self.mx * x + self.my * y)
+    }
+}
+
 /// Convex cylinder of radius `rho`, axis along x at z = 0 (top at z = rho).
 pub struct Cylinder {
     pub rho: f64,
