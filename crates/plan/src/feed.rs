@@ -268,6 +268,9 @@ enum Action {
     Split(f64),
     /// Drop the midpoint, then test it (sampled path).
     Test,
+    /// Drop the midpoint, then test only that the CL does not rise above the chord there
+    /// (sampled path, the excess side certified by the contact pieces' dip, mm).
+    TestUpper(f64),
 }
 
 /// Where the contact pieces of samples `a` and `b` cross between them (mm along `u`): at a
@@ -408,7 +411,18 @@ fn classify(s: &dyn ClSurface, f: &Raster, v: f64, p: &Profile, j: usize, chk: &
     } else if du > chk.spacing {
         Action::Split(mid)
     } else {
-        Action::Test
+        // No corner radius: the excess side by the contact pieces where the surface
+        // certifies them; the gouge side by the midpoint (a single ridge between the samples
+        // deviates at most twice as much as the midpoint does).
+        match dip_bound(s, f, v, (ua, ca), (ub, cb)) {
+            Some(dip) if dip <= chk.dip_budget => Action::TestUpper(dip),
+            Some(_) => Action::Split(
+                crease_at(s, f, v, (ua, ca), (ub, cb))
+                    .filter(|&u| u - ua > MIN_DU_MM && ub - u > MIN_DU_MM)
+                    .unwrap_or(mid),
+            ),
+            None => Action::Test,
+        }
     }
 }
 
@@ -464,7 +478,7 @@ fn refine(s: &dyn ClSurface, f: &Raster, v: f64, mut p: Profile, chk: &Check) ->
             .filter_map(|(&j, a)| match *a {
                 Action::Done(_) => None,
                 Action::Split(u) => Some(u),
-                Action::Test => Some(0.5 * (p.pts[j].0 + p.pts[j + 1].0)),
+                Action::Test | Action::TestUpper(_) => Some(0.5 * (p.pts[j].0 + p.pts[j + 1].0)),
             })
             .collect();
         let mids: Vec<Option<ClSample>> = want
@@ -491,6 +505,23 @@ fn refine(s: &dyn ClSurface, f: &Raster, v: f64, mut p: Profile, chk: &Check) ->
                         Some(c) if midpoint_ok(&p, j, c.z, chk) => {
                             p.gaps[j] = Gap::Open {
                                 dip: None,
+                                mid: Some(c.z),
+                            }
+                        }
+                        _ => insert.push((j, at[wi - 1], m)),
+                    }
+                }
+                Action::TestUpper(dip) => {
+                    let m = mids[wi];
+                    wi += 1;
+                    let ((ua, za), (ub, zb)) = (p.pts[j], p.pts[j + 1]);
+                    let lerp = 0.5 * (za + zb);
+                    // Normal to the chord: the gouge side bounds the cutter's penetration.
+                    let cos = 1.0 / (1.0 + ((zb - za) / (ub - ua)).powi(2)).sqrt();
+                    match m {
+                        Some(c) if (c.z - lerp) * cos <= chk.eta / 2.0 => {
+                            p.gaps[j] = Gap::Open {
+                                dip: Some(dip),
                                 mid: Some(c.z),
                             }
                         }
@@ -602,8 +633,10 @@ pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option
                     }
                     worst = worst.max(pen);
                 } else {
+                    // Sampled path: the move's depth below the CL at the samples and the
+                    // midpoint, normal to the move (the penetration it stands for).
                     sampled = true;
-                    let g = up.max(mid_dev.unwrap_or(0.0));
+                    let g = up.max(mid_dev.unwrap_or(0.0)) / stretch;
                     if g > chk.accept {
                         return None;
                     }
