@@ -3,5 +3,6 @@
 mod cl;
 mod plan;
 mod plan_checks;
+mod plan_rs274;
 mod support;
 mod verify;
