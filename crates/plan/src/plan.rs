@@ -143,6 +143,37 @@ pub fn plan(
     rayon::scope(|_| plan_passes(surface, sampler, cfg, progress))
 }
 
+/// Everything a range of passes needs, shared by the chunks planned in parallel.
+struct Ctx<'a> {
+    surface: &'a dyn ClSurface,
+    sampler: &'a dyn PassSampler,
+    cfg: &'a PlanConfig,
+    frame: Raster,
+    model: sidestep::SideStepModel,
+    chk: Check,
+    initial: f64,
+    floor: f64,
+    w_ref: f64,
+}
+
+/// The passes of one chunk of the `v` range, in order (the last lands on the chunk's end).
+struct Range {
+    passes: Vec<PassPlan>,
+    marched: Vec<feed::Marched>,
+    drops: usize,
+    builds: usize,
+}
+
+/// Passes are planned in chunks of the `v` range this many flat-ground steps wide (at least
+/// one chunk, at most [`MAX_CHUNKS`]), in parallel. The chunks depend on the part and the
+/// settings only, so the plan is the same for any number of threads; each chunk costs about
+/// two extra pass profiles (the pass behind its first one, and its last pass, which the next
+/// chunk's first pass repeats).
+const CHUNK_STEPS: f64 = 10.0;
+
+/// Most chunks a plan is split into.
+const MAX_CHUNKS: usize = 16;
+
 fn plan_passes(
     surface: &dyn ClSurface,
     sampler: &dyn PassSampler,
@@ -153,13 +184,10 @@ fn plan_passes(
     let frame = Raster::new(cfg.angle_deg);
     let cutter = cfg.cutter;
     let h = cfg.scallop_mm;
-    let model = sidestep::SideStepModel::new(cutter, h);
     // Reference step: a ball of the cutter's radius on flat ground. It sets the floor of the
-    // interval (steep walls).
+    // interval (steep walls) and the chunk width.
     let rr = cutter.radius();
     let w_ref = 2.0 * (2.0 * rr * h - h * h).max(0.0).sqrt();
-    let floor = STEEP_FLOOR_FRACTION * w_ref;
-    let verify_spacing = (2.0 * rr).max(1.0);
     let (mut v_lo, mut v_hi) = sampler.v_range().ok_or(PlanError::NothingToCut)?;
     if let Some(b) = cfg.boundary {
         let (a, z) = frame.v_range_of(b);
@@ -169,19 +197,94 @@ fn plan_passes(
     if v_lo.is_nan() || v_hi.is_nan() || v_lo > v_hi {
         return Err(PlanError::NothingToCut);
     }
-    let report = |done: usize| {
+    let ctx = Ctx {
+        surface,
+        sampler,
+        cfg,
+        frame,
+        model: sidestep::SideStepModel::new(cutter, h),
+        chk: Check::new(
+            cfg.tolerance_mm,
+            cutter.corner_radius(),
+            rr,
+            c,
+            cfg.max_step_mm.unwrap_or(f64::INFINITY),
+        ),
+        initial: cfg.section_step_mm()?,
+        floor: STEEP_FLOOR_FRACTION * w_ref,
+        w_ref,
+    };
+    let width = v_hi - v_lo;
+    let chunks = ((width / (CHUNK_STEPS * w_ref)).floor() as usize).clamp(1, MAX_CHUNKS);
+    let bounds: Vec<(f64, f64)> = (0..chunks)
+        .map(|k| {
+            let a = v_lo + width * k as f64 / chunks as f64;
+            let b = if k + 1 == chunks {
+                v_hi
+            } else {
+                v_lo + width * (k + 1) as f64 / chunks as f64
+            };
+            (a, b)
+        })
+        .collect();
+    // Progress: the v covered so far over all chunks, in µm.
+    let covered = std::sync::atomic::AtomicU64::new(0);
+    let total_um = (width * 1000.0).max(1.0);
+    let report = |dv: f64| {
         if let Some(p) = progress {
-            p(done.min(1000), 1000);
+            let add = (dv * 1000.0).max(0.0) as u64;
+            let done = covered.fetch_add(add, std::sync::atomic::Ordering::Relaxed) + add;
+            p(
+                ((done as f64 / total_um) * 1000.0).min(1000.0) as usize,
+                1000,
+            );
         }
     };
-    let chk = Check::new(
-        cfg.tolerance_mm,
-        cutter.corner_radius(),
-        rr,
-        c,
-        cfg.max_step_mm.unwrap_or(f64::INFINITY),
-    );
-    let initial = cfg.section_step_mm()?;
+    let ranges: Vec<Range> = bounds
+        .par_iter()
+        .map(|&(a, b)| plan_range(&ctx, a, b, &report))
+        .collect();
+    if let Some(p) = progress {
+        p(1000, 1000);
+    }
+    // Join: each chunk's last pass is the next chunk's first one (same v, same profile);
+    // keep the later record, which carries the interval to the pass after it.
+    let mut passes: Vec<PassPlan> = Vec::new();
+    let mut marched: Vec<feed::Marched> = Vec::new();
+    let (mut drops, mut builds) = (0, 0);
+    for (k, r) in ranges.into_iter().enumerate() {
+        if k > 0 {
+            passes.pop();
+            marched.pop();
+        }
+        passes.extend(r.passes);
+        marched.extend(r.marched);
+        drops += r.drops;
+        builds += r.builds;
+    }
+    let mut plan = assemble(surface, &ctx.frame, cfg, &ctx.chk, &passes, marched)?;
+    plan.drops = drops;
+    plan.pass_builds = builds;
+    Ok(plan)
+}
+
+/// Plans the passes from `v_lo` to `v_hi` (the first at `v_lo`, the last at `v_hi`).
+fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)) -> Range {
+    let Ctx {
+        surface,
+        sampler,
+        cfg,
+        frame,
+        ref model,
+        ref chk,
+        initial,
+        floor,
+        w_ref,
+    } = *ctx;
+    let frame = &frame;
+    let cutter = cfg.cutter;
+    let h = cfg.scallop_mm;
+    let verify_spacing = (2.0 * cutter.radius()).max(1.0);
     let mut drops = 0usize;
     let builds = std::cell::Cell::new(0usize);
     let build = |v: f64, drops: &mut usize| -> Pass {
@@ -198,11 +301,11 @@ fn plan_passes(
             });
         }
         let prof = match range {
-            Some(r) => feed::profile(surface, &frame, v, r, &samples, initial, &chk),
+            Some(r) => feed::profile(surface, frame, v, r, &samples, initial, chk),
             None => Profile::default(),
         };
         *drops += prof.drops;
-        let marched = feed::march(&prof, &chk);
+        let marched = feed::march(&prof, chk);
         Pass { v, prof, marched }
     };
     // The first interval's curvature needs a pass behind the first one.
@@ -245,9 +348,9 @@ fn plan_passes(
             let cand = build(v + dv, &mut drops);
             let nd = interval::needed(
                 surface,
-                &frame,
+                frame,
                 v,
-                &model,
+                model,
                 behind.as_ref().map(|b| (&b.prof, dv_prev)),
                 (&cur.prof, &slopes),
                 &cand.prof,
@@ -283,9 +386,9 @@ fn plan_passes(
                 let cand = build(v + dv, &mut drops);
                 let nd = interval::needed(
                     surface,
-                    &frame,
+                    frame,
                     v,
-                    &model,
+                    model,
                     behind.as_ref().map(|b| (&b.prof, dv_prev)),
                     (&cur.prof, &slopes),
                     &cand.prof,
@@ -302,12 +405,12 @@ fn plan_passes(
         if cutter.kind() != cam_core::CutterKind::Ball {
             let probes: Vec<interval::Probe> = verify_points(&cur.prof, verify_spacing)
                 .par_iter()
-                .map(|&(u, _)| interval::Probe::new(&model, &slopes, u))
+                .map(|&(u, _)| interval::Probe::new(model, &slopes, u))
                 .collect();
             for _ in 0..12 {
                 let worst = probes
                     .par_iter()
-                    .filter_map(|pr| interval::cl_scallop(surface, &frame, &model, pr, v, dv))
+                    .filter_map(|pr| interval::cl_scallop(surface, frame, model, pr, v, dv))
                     .reduce(|| 0.0, f64::max);
                 drops += probes.len() * (interval::VERIFY_Q + 1);
                 verified_scallop = worst;
@@ -318,9 +421,9 @@ fn plan_passes(
                 next = build(v + dv, &mut drops);
                 need = interval::needed(
                     surface,
-                    &frame,
+                    frame,
                     v,
-                    &model,
+                    model,
                     behind.as_ref().map(|b| (&b.prof, dv_prev)),
                     (&cur.prof, &slopes),
                     &next.prof,
@@ -341,7 +444,7 @@ fn plan_passes(
             predicted,
             steep: need.steep,
         });
-        report(((v - v_lo) / (v_hi - v_lo).max(1e-12) * 1000.0) as usize);
+        report(dv);
         // Next prediction: what the model allowed here (less the jitter margin), growing at
         // most twofold per pass.
         let allowed = need.interval.max(floor);
@@ -361,11 +464,12 @@ fn plan_passes(
             marched: feed::Marched::default(),
         });
     }
-    report(1000);
-    let mut plan = assemble(surface, &frame, cfg, &chk, &passes, marched)?;
-    plan.drops = drops;
-    plan.pass_builds = builds.into_inner();
-    Ok(plan)
+    Range {
+        passes,
+        marched,
+        drops,
+        builds: builds.into_inner(),
+    }
 }
 
 fn assemble(
