@@ -40,6 +40,22 @@ impl Profile {
         matches!(self.gaps[j], Gap::Break)
     }
 
+    /// The plane `(n, d)` of the planar gap containing `u`, if it is one (see `feed::Gap`).
+    pub(crate) fn plane_at(&self, u: f64) -> Option<(cam_core::DVec3, f64)> {
+        let pts = &self.pts;
+        if pts.len() < 2 || !(u >= pts[0].0 && u <= pts[pts.len() - 1].0) {
+            return None;
+        }
+        let j = pts
+            .partition_point(|p| p.0 <= u)
+            .saturating_sub(1)
+            .min(pts.len() - 2);
+        match self.gaps[j] {
+            Gap::Planar { .. } => self.cert[j].plane,
+            _ => None,
+        }
+    }
+
     /// The profile's z (mm) at `u`, linear between samples; `None` outside it or across a
     /// break.
     pub(crate) fn z_at(&self, u: f64) -> Option<f64> {
@@ -359,6 +375,11 @@ pub(crate) struct Probe {
 }
 
 impl Probe {
+    /// Where the probe stands along the pass (mm).
+    pub(crate) fn u(&self) -> f64 {
+        self.u
+    }
+
     /// The probe at `u` on a pass whose slopes are `slopes`.
     pub(crate) fn new(model: &sidestep::SideStepModel, slopes: &AlongSlopes, u: f64) -> Probe {
         let p = slopes.at(u);

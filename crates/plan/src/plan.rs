@@ -403,16 +403,27 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
         // model cannot see the part under a CL plateau); shrink until it holds.
         let mut verified_scallop = 0.0f64;
         if cutter.kind() != cam_core::CutterKind::Ball {
+            // Where both passes are certified planar on one plane at u, the CL surface
+            // between them is that plane (the certificates cover everything within R of
+            // either pass, and passes are less than 2R apart), where the model is exact.
+            let planar = |u: f64, next: &Pass| match (cur.prof.plane_at(u), next.prof.plane_at(u)) {
+                (Some((na, da)), Some((nb, db))) => {
+                    (na - nb).length() <= 1e-12 && (da - db).abs() <= 1e-9
+                }
+                _ => false,
+            };
             let probes: Vec<interval::Probe> = verify_points(&cur.prof, verify_spacing)
                 .par_iter()
                 .map(|&(u, _)| interval::Probe::new(model, &slopes, u))
                 .collect();
             for _ in 0..12 {
-                let worst = probes
+                let live: Vec<&interval::Probe> =
+                    probes.iter().filter(|pr| !planar(pr.u(), &next)).collect();
+                let worst = live
                     .par_iter()
                     .filter_map(|pr| interval::cl_scallop(surface, frame, model, pr, v, dv))
                     .reduce(|| 0.0, f64::max);
-                drops += probes.len() * (interval::VERIFY_Q + 1);
+                drops += live.len() * (interval::VERIFY_Q + 1);
                 verified_scallop = worst;
                 if worst <= h * (1.0 + VERIFY_SLACK) || dv <= floor {
                     break;
