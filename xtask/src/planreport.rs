@@ -6,8 +6,11 @@
 //! - **gouge**: the deepest design point inside the swept volume. Where the z-map's vertical
 //!   depth exceeds τ, ball and bull depths are computed exactly (the swept volume is the swept
 //!   core grown by the corner radius r, so the depth is r minus the distance to the swept
-//!   core); the vertical depth over-states it where the cutter's surface is steep. Flat end
-//!   mills report the vertical depth.
+//!   core); the vertical depth over-states it where the cutter's surface is steep. A flat end
+//!   mill's volume swept along a move is convex (the segment ⊕ its disc ⊕ the shank ray up),
+//!   so the depth is the least `h(u) − p·u` over directions `u` pointing down or level (h its
+//!   support function); minimised over a set of directions refined about the best, so it
+//!   can only be over-stated.
 //! - **scallop**: the largest material left (vertical excess × the design normal's z, first
 //!   order) at design points the cutter can touch: the cutter placed to touch the point along
 //!   its normal is clear of the part (checked with the exact drop-cutter). Points it cannot
@@ -36,7 +39,6 @@ struct Row {
     plan_s: f64,
     bound: f64,
     gouge: f64,
-    gouge_exact: bool,
     scallop: f64,
     scallop_at: (f64, f64),
     unreachable: usize,
@@ -96,7 +98,6 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 plan_s,
                 bound: plan.max_chord_deviation_mm,
                 gouge: 0.0,
-                gouge_exact: cutter.kind() != CutterKind::Flat,
                 scallop: 0.0,
                 scallop_at: (f64::NAN, f64::NAN),
                 unreachable: 0,
@@ -106,10 +107,11 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 let (x, y) = (z.grid.x(n.i as usize), z.grid.y(n.j as usize));
                 let p = DVec3::new(x, y, n.design_z_mm);
                 if -n.vertical_mm > tau {
-                    let g = if row.gouge_exact {
-                        moves.depth(&cutter, p)
+                    let g = if cutter.kind() == CutterKind::Flat {
+                        // The vertical depth bounds the depth from above as well.
+                        moves.flat_depth(cutter.radius(), p).min(-n.vertical_mm)
                     } else {
-                        -n.vertical_mm
+                        moves.depth(&cutter, p)
                     };
                     row.gouge = row.gouge.max(g);
                 } else {
@@ -135,7 +137,7 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 }
             }
             println!(
-                "| {} | {} | {} | {} | {} | {} | {:.3} | {:.6} | {:.6}{} | {:.6} ({:.2}, {:.2}) | {} / {} |",
+                "| {} | {} | {} | {} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} ({:.2}, {:.2}) | {} / {} |",
                 row.part,
                 row.cutter,
                 row.tau,
@@ -145,7 +147,6 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 row.plan_s,
                 row.bound,
                 row.gouge,
-                if row.gouge_exact { "" } else { " (vertical)" },
                 row.scallop,
                 row.scallop_at.0,
                 row.scallop_at.1,
@@ -157,7 +158,8 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
     println!(
         "\nplanner's bound: the largest penetration or vertical excess the planner proved for a \
          cut move (flat end mills: checked at samples). max gouge: deepest design point in the \
-         swept volume of the re-read program (exact for ball and bull). max scallop: largest \
+         swept volume of the re-read program (exact for ball and bull; for a flat end mill at \
+         most over-stated by the direction search). max scallop: largest \
          material left at a design point the cutter can touch, normal to the surface (first \
          order), so it includes the up-to-τ excess a move may keep over the CL surface."
     );
@@ -229,6 +231,96 @@ impl MoveIndex {
             ny,
             buckets,
         }
+    }
+
+    /// Depth (mm) of `p` in the volume a flat end mill of radius `rr` sweeps along the moves,
+    /// at least the exact depth: the largest over the moves of the depth in each move's convex
+    /// swept volume, each the least `max(a·u, b·u) + rr·|u_xy| − p·u` over unit directions `u`
+    /// with `u_z ≤ 0` (a grid of directions, then a local refinement about the best one).
+    fn flat_depth(&self, rr: f64, p: DVec3) -> f64 {
+        let i = (((p.x - self.x0) / self.cell).floor().max(0.0) as usize).min(self.nx - 1);
+        let j = (((p.y - self.y0) / self.cell).floor().max(0.0) as usize).min(self.ny - 1);
+        let dir = |az: f64, el: f64| {
+            let (se, ce) = el.sin_cos();
+            DVec3::new(ce * az.cos(), ce * az.sin(), -se)
+        };
+        let mut depth = f64::NEG_INFINITY;
+        for &k in &self.buckets[j * self.nx + i] {
+            let (a, b) = self.moves[k as usize];
+            // Only a move whose flat bottom passes below p at p's XY contains it: the bottom
+            // is at the tip's z wherever the tip is within rr of p in XY.
+            let d = b.truncate() - a.truncate();
+            let w = p.truncate() - a.truncate();
+            let dd = d.length_squared();
+            let (t0, t1) = if dd < 1e-24 {
+                if w.length_squared() > rr * rr {
+                    continue;
+                }
+                (0.0, 1.0)
+            } else {
+                let tc = w.dot(d) / dd;
+                let perp2 = (w - d * tc).length_squared();
+                if perp2 > rr * rr {
+                    continue;
+                }
+                let half = ((rr * rr - perp2) / dd).sqrt();
+                ((tc - half).max(0.0), (tc + half).min(1.0))
+            };
+            if t0 > t1 || a.z + (b.z - a.z) * t0 >= p.z && a.z + (b.z - a.z) * t1 >= p.z {
+                continue;
+            }
+            let f = |az: f64, el: f64| {
+                let u = dir(az, el.clamp(0.0, std::f64::consts::FRAC_PI_2));
+                a.dot(u).max(b.dot(u)) + rr * (u.x * u.x + u.y * u.y).sqrt() - p.dot(u)
+            };
+            // Grid, then a pattern search (axis and diagonal steps, which follow the ridge
+            // where the two end points' planes meet) from each of the best few grid
+            // directions: the function is convex in u ∈ R³ but not on the sphere.
+            const NA: usize = 180;
+            const NE: usize = 45;
+            let mut grid: Vec<(f64, f64, f64)> = Vec::with_capacity(NA * (NE + 1));
+            for ia in 0..NA {
+                for ie in 0..=NE {
+                    let (az, el) = (
+                        ia as f64 * std::f64::consts::TAU / NA as f64,
+                        ie as f64 * std::f64::consts::FRAC_PI_2 / NE as f64,
+                    );
+                    grid.push((f(az, el), az, el));
+                }
+            }
+            grid.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut best = f64::INFINITY;
+            for &(v0, az0, el0) in grid.iter().take(4) {
+                let (mut v, mut az, mut el) = (v0, az0, el0);
+                let mut step = std::f64::consts::TAU / NA as f64;
+                while step > 1e-9 {
+                    let mut moved = false;
+                    for (da, de) in [
+                        (1.0, 0.0),
+                        (-1.0, 0.0),
+                        (0.0, 1.0),
+                        (0.0, -1.0),
+                        (1.0, 1.0),
+                        (1.0, -1.0),
+                        (-1.0, 1.0),
+                        (-1.0, -1.0),
+                    ] {
+                        let e = (el + de * step).clamp(0.0, std::f64::consts::FRAC_PI_2);
+                        let w = f(az + da * step, e);
+                        if w < v {
+                            (v, az, el) = (w, az + da * step, e);
+                            moved = true;
+                        }
+                    }
+                    if !moved {
+                        step *= 0.5;
+                    }
+                }
+                best = best.min(v);
+            }
+            depth = depth.max(best);
+        }
+        depth
     }
 
     /// Exact depth (mm) of `p` in the volume a ball or bull cutter sweeps along the moves:
