@@ -341,22 +341,26 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
         // candidate holds; the prediction grows at most twofold per pass, so passes
         // approaching a feature across flat ground do not creep towards it.
         let slopes = interval::AlongSlopes::new(&cur.prof, cutter.corner_radius());
-        let mut dv = dv_pred.max(floor).min(v_hi - v);
-        let mut good: Option<(f64, Pass, interval::Need)> = None;
-        let mut tries = 0;
-        loop {
-            let cand = build(v + dv, &mut drops);
-            let nd = interval::needed(
+        // The side-step model between this pass and a candidate next one `dv` away.
+        let evaluate = |next: &Pass, dv: f64| {
+            interval::needed(
                 surface,
                 frame,
                 v,
                 model,
                 behind.as_ref().map(|b| (&b.prof, dv_prev)),
                 (&cur.prof, &slopes),
-                &cand.prof,
+                &next.prof,
                 dv,
                 floor,
-            );
+            )
+        };
+        let mut dv = dv_pred.max(floor).min(v_hi - v);
+        let mut good: Option<(f64, Pass, interval::Need)> = None;
+        let mut tries = 0;
+        loop {
+            let cand = build(v + dv, &mut drops);
+            let nd = evaluate(&cand, dv);
             tries += 1;
             drops += nd.drops;
             let allowed = nd.interval.max(floor);
@@ -384,17 +388,7 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
                 // Out of tries: the floor always holds.
                 let dv = floor.min(v_hi - v);
                 let cand = build(v + dv, &mut drops);
-                let nd = interval::needed(
-                    surface,
-                    frame,
-                    v,
-                    model,
-                    behind.as_ref().map(|b| (&b.prof, dv_prev)),
-                    (&cur.prof, &slopes),
-                    &cand.prof,
-                    dv,
-                    floor,
-                );
+                let nd = evaluate(&cand, dv);
                 drops += nd.drops;
                 (dv, cand, nd)
             }
@@ -430,17 +424,7 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
                 }
                 dv = (dv * (0.995 * (h / worst).sqrt()).clamp(0.3, 0.995)).max(floor);
                 next = build(v + dv, &mut drops);
-                need = interval::needed(
-                    surface,
-                    frame,
-                    v,
-                    model,
-                    behind.as_ref().map(|b| (&b.prof, dv_prev)),
-                    (&cur.prof, &slopes),
-                    &next.prof,
-                    dv,
-                    floor,
-                );
+                need = evaluate(&next, dv);
             }
         }
         let predicted = need
