@@ -3,6 +3,7 @@ pub mod deviation;
 pub mod envelope;
 pub mod heatmap;
 pub mod imprint;
+pub mod model;
 pub mod pipeline;
 pub mod ply;
 pub mod refine;
