@@ -133,9 +133,9 @@ pub fn run_verification(
             .unwrap_or("")
             .to_ascii_lowercase();
         cam_core::io::write_atomic(p, |w| match ext.as_str() {
-            "obj" => cam_verify::sweep::write_obj(&v.swept, w),
-            "ply" => cam_verify::sweep::write_ply(&v.swept, w),
-            _ => cam_verify::sweep::write_stl(&v.swept, w),
+            "obj" => cam_verify::sweep::write_obj(&v.swept_surface(), w),
+            "ply" => cam_verify::sweep::write_ply(&v.swept_surface(), w),
+            _ => cam_verify::sweep::write_stl(&v.swept_surface(), w),
         })
         .with_context(|| format!("{}: cannot write", p.display()))?;
     }

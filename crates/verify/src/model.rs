@@ -83,6 +83,10 @@ pub struct SweepModel {
     pub pieces: Vec<Piece>,
     /// Imprinted points (poses × points per curve), for statistics.
     pub imprint_points: usize,
+    /// `(cos, sin)` of the cap sector angles `2π·s/Q`, `s = 0 ..= Q`.
+    sector_cs: Vec<(f64, f64)>,
+    /// `(sin, cos)` of the cap ring profile angles `π/2 · g/rings`, `g = 0 ..= rings`.
+    ring_sc: Vec<(f64, f64)>,
 }
 
 /// A run of poses joined by feed steps; `steps[i]` is the step `i → i+1`.
@@ -123,7 +127,7 @@ fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch
     for (i, w) in path.moves.windows(2).enumerate() {
         let idx = (i + 1) as u32;
         let (a, b) = (&w[0].pose, &w[1].pose);
-        if w[1].kind == MoveKind::Rapid {
+        if w[1].kind == MoveKind::Rapid || (cfg.rotating_only && a.axis == b.axis) {
             if cur.poses.len() >= 2 {
                 out.push(std::mem::take(&mut cur));
             }
@@ -298,11 +302,27 @@ impl SweepModel {
             });
             frames.extend(seg.frames);
         }
+        let rings = (q / 4).max(2);
+        let step = 2.0 * std::f64::consts::PI / q as f64;
+        let sector_cs = (0..=q)
+            .map(|s| {
+                let phi = s as f64 * step;
+                (phi.cos(), phi.sin())
+            })
+            .collect();
+        let ring_sc = (0..=rings)
+            .map(|g| {
+                let theta = std::f64::consts::FRAC_PI_2 * g as f64 / rings as f64;
+                (theta.sin(), theta.cos())
+            })
+            .collect();
         SweepModel {
             cutter: *cutter,
             reverse: cfg.reverse,
             inserts: q,
-            rings: (q / 4).max(2),
+            rings,
+            sector_cs,
+            ring_sc,
             per_curve: l,
             imprint_points: total * l,
             frames,
@@ -365,11 +385,27 @@ impl SweepModel {
     /// Point of cap ring `ring` at sector boundary `sector` (angle `2π·sector/Q`) of frame `f`.
     pub fn cap_point(&self, f: &PoseFrame, sector: usize, ring: usize) -> DVec3 {
         let (a, r) = (self.cutter.major_radius(), self.cutter.corner_radius());
-        let step = 2.0 * std::f64::consts::PI / self.inserts as f64;
-        let phi = sector as f64 * step;
-        let u = phi.cos() * f.e1 + phi.sin() * f.e2;
-        let theta = std::f64::consts::FRAC_PI_2 * ring as f64 / self.rings as f64;
-        f.centre + a * u + r * (theta.sin() * u - theta.cos() * f.axis)
+        let (c, s) = self.sector_cs[sector];
+        let u = c * f.e1 + s * f.e2;
+        let (ts, tc) = self.ring_sc[ring];
+        f.centre + a * u + r * (ts * u - tc * f.axis)
+    }
+
+    /// Number of triangle slots per cap sector (fan triangle, then two per ring).
+    pub fn cap_slots_per_sector(&self) -> usize {
+        self.cap_per_sector()
+    }
+
+    /// The pose frame of piece `i`: a strip's first pose or a cap's pose.
+    pub fn piece_frame(&self, i: usize) -> u32 {
+        match self.pieces[i] {
+            Piece::Strip { frame, .. } | Piece::Cap { frame, .. } => frame,
+        }
+    }
+
+    /// The oriented triangle in slot `local` of piece `i` (see [`SweepModel::triangle`]).
+    pub fn slot_triangle(&self, i: usize, local: usize) -> Option<Triangle> {
+        self.triangle(i, local)
     }
 
     /// The unoriented corners of local triangle `local` of piece `i`, before the degenerate
@@ -380,7 +416,11 @@ impl SweepModel {
                 let (c0, c1) = (self.curve(frame), self.curve(frame + 1));
                 let j = local / 2;
                 let (a, b, c, d) = (c0[j], c0[j + 1], c1[j + 1], c1[j]);
-                if local % 2 == 0 { [a, b, c] } else { [a, c, d] }
+                if local.is_multiple_of(2) {
+                    [a, b, c]
+                } else {
+                    [a, c, d]
+                }
             }
             Piece::Cap { frame, .. } => {
                 let f = &self.frames[frame as usize];

@@ -58,6 +58,11 @@ pub struct SweepConfig {
     /// A turn of the motion direction above this angle (degrees) breaks the surface and caps
     /// both sides. Default 30.
     pub sharp_turn_deg: f64,
+    /// Sweep only the moves whose tool axis turns; the others end a stretch like a rapid.
+    /// The verifier's back-gouge sweep uses it when it refines onto the exact swept volume,
+    /// which for a move without rotation already holds the whole tool (see
+    /// [`crate::measure`]). Default false.
+    pub rotating_only: bool,
 }
 
 impl Default for SweepConfig {
@@ -69,6 +74,7 @@ impl Default for SweepConfig {
             max_step_mm: 0.5,
             reverse: false,
             sharp_turn_deg: 30.0,
+            rotating_only: false,
         }
     }
 }

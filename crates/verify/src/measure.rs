@@ -1,0 +1,758 @@
+//! The normal-vector deviation against swept-surface models: locate crossings on the
+//! piecewise-linear imprint surface ([`crate::locate`]), then, for the [`SurfaceModel::Exact`]
+//! surface, refine them onto the exact swept volume ([`crate::exact`]).
+//!
+//! # Why refine, and which crossings
+//! The imprint surface joins exact points by chords, so it lies inside the swept volume by
+//! up to the chord sag (`r(1 − cos π/Q)` across a ball's groove, 9.25 µm at Q = 40; more for
+//! a bull's long chords along its rim). A vector meets it that much (divided by the cosine
+//! of its incidence) beyond the true surface. Refinement solves for the true entry near each
+//! crossing. Where two sheets cross (the crest between passes) the lowest triangle may not
+//! belong to the lowest true sheet, so every crossing `c` with
+//! `s_c ≤ s_min + δ_c` is refined, `δ_c = 2·sag_c / max(|facing_c|, 0.2)` with `sag_c`
+//! estimated from the triangle's edges and the turn of the tool normal along them (capped
+//! at the search window of [`window`]); the lowest refined entry wins.
+//!
+//! # What a refined value means
+//! Every refined entry is a point where the vector enters the cutter at some pose of the
+//! path, so it is never below the true first entry; for the move searched it is exact (see
+//! [`crate::exact`]). Where no crossing of a vector can be refined, its lowest crossing on the
+//! imprint surface is kept and counted in [`MeasureStats::kept_linear`].
+
+use cam_core::{DVec3, Toolpath};
+use rayon::prelude::*;
+
+use crate::deviation::{Deviation, DeviationConfig, DeviationError, Facing};
+use crate::exact::{BodyFrame, Entry, Line, MoveGeometry, Puck};
+use crate::locate::{Crossing, PatchBvh, Vector, locate};
+use crate::model::{Piece, SweepModel, unkey};
+use crate::refine::RefinedMesh;
+
+/// Which swept surface the deviations are measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum SurfaceModel {
+    /// The paper's piecewise-linear imprint surface (triangles between imprint points).
+    Linear,
+    /// Crossings refined onto the exact swept volume (default).
+    Exact,
+}
+
+/// Counts of what the measurement did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct MeasureStats {
+    /// Vectors with at least one crossing.
+    pub crossed: usize,
+    /// Crossings refined (after removing duplicates of one move or piece).
+    pub refinements: usize,
+    /// Vectors whose value is a refined entry.
+    pub refined: usize,
+    /// Vectors whose crossings could not be refined: their linear value is kept.
+    pub kept_linear: usize,
+    /// Vectors with more qualifying crossings than kept.
+    pub overflow: usize,
+}
+
+/// The measurement.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    /// Per refined vertex, in vertex order.
+    pub deviations: Vec<Deviation>,
+    /// Per vertex: the outward normal of the swept surface at the answer dotted with the
+    /// vector (`< 0`), or 0 where nothing was crossed.
+    pub facing: Vec<f64>,
+    /// Per vertex: the lowest crossing of the piecewise-linear surface (mm).
+    pub linear_mm: Vec<Option<f64>>,
+    /// Per vertex: the model (index into the models measured) and piece that gave the answer.
+    pub source: Vec<Option<(u8, u32)>>,
+    /// What was done.
+    pub stats: MeasureStats,
+}
+
+/// How deep (mm) `p` lies inside the volume swept by the move of piece `source`
+/// `(model, piece)` (for a cap, the tool at its pose): `r` minus the distance to the swept
+/// disk ([`MoveGeometry::depth_at`]); 0 when outside.
+pub fn depth_inside(
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    source: (u8, u32),
+    p: DVec3,
+) -> f64 {
+    let Some(m) = models.get(source.0 as usize) else {
+        return 0.0;
+    };
+    let puck = Puck::of(m.cutter());
+    let g = match m.pieces.get(source.1 as usize) {
+        Some(Piece::Strip { step, .. }) => {
+            let i = step.mv as usize;
+            if i == 0 || i >= toolpath.moves.len() {
+                return 0.0;
+            }
+            MoveGeometry {
+                a: toolpath.moves[i - 1].pose,
+                b: toolpath.moves[i].pose,
+                puck,
+            }
+        }
+        Some(Piece::Cap { frame, .. }) => {
+            let f = &m.frames[*frame as usize];
+            let pose = cam_core::Pose {
+                tip: f.tip(puck.r),
+                axis: f.axis,
+            };
+            MoveGeometry {
+                a: pose,
+                b: pose,
+                puck,
+            }
+        }
+        None => return 0.0,
+    };
+    g.depth_at(p)
+}
+
+const SAFETY: f64 = 4.0;
+const MIN_FACING: f64 = 0.2;
+
+/// Largest chord sag (mm) of the imprint surface's caps, also a scale for its strips: the
+/// rim's chord over one sector and the corner's over one ring.
+fn tool_sag(model: &SweepModel) -> f64 {
+    let c = model.cutter();
+    let (a, r) = (c.major_radius(), c.corner_radius());
+    let q = model.inserts() as f64;
+    let rings = model.rings() as f64;
+    ((a + r) * (1.0 - (std::f64::consts::PI / q).cos()))
+        .max(r * (1.0 - (std::f64::consts::FRAC_PI_4 / rings).cos()))
+}
+
+/// The search window above the lowest crossing (mm): the largest `δ_c` allowed.
+pub fn window(models: &[&SweepModel]) -> f64 {
+    models
+        .iter()
+        .map(|m| SAFETY * tool_sag(m) / MIN_FACING)
+        .fold(1e-6, f64::max)
+}
+
+/// Unit normal of the tool at imprint point `m` of pose frame `f` (for a flat end mill, the
+/// rim's radial direction, which turns the same way along the rim).
+fn point_normal(model: &SweepModel, f: u32, m: DVec3) -> DVec3 {
+    let fr = &model.frames[f as usize];
+    let c = model.cutter();
+    let (a, r) = (c.major_radius(), c.corner_radius());
+    let y = m - fr.centre;
+    let h = y - y.dot(fr.axis) * fr.axis;
+    let uh = h.try_normalize().unwrap_or(fr.e1);
+    if r > 0.0 {
+        ((y - a * uh) / r).try_normalize().unwrap_or(-fr.axis)
+    } else {
+        uh
+    }
+}
+
+/// The strip slot's corners as (pose 0 or 1, point index), in the order of the unoriented
+/// triangle.
+fn slot_corners(slot: usize) -> [(usize, usize); 3] {
+    let j = slot / 2;
+    if slot.is_multiple_of(2) {
+        [(0, j), (0, j + 1), (1, j + 1)]
+    } else {
+        [(0, j), (1, j + 1), (1, j)]
+    }
+}
+
+/// The corners of a strip triangle in the oriented triangle's order.
+fn oriented_corners(model: &SweepModel, piece: usize, slot: usize) -> Option<[(usize, usize); 3]> {
+    let Piece::Strip { frame, .. } = model.pieces[piece] else {
+        return None;
+    };
+    let t = model.slot_triangle(piece, slot)?;
+    let mut c = slot_corners(slot);
+    let p1 = model.curve(frame + c[1].0 as u32)[c[1].1];
+    if t.v[1] != p1 {
+        c.swap(1, 2);
+    }
+    Some(c)
+}
+
+/// Sag estimate (mm) of the triangle of a crossing: per edge, its length times the turn of
+/// the tool normal along it over 8 (exact for a circular arc to second order; the turn is
+/// taken as the chord `|n_i − n_j|` of the unit normals, times 1.1 to cover the arc).
+fn sag_of(model: &SweepModel, piece: usize, slot: usize) -> f64 {
+    match model.pieces[piece] {
+        Piece::Cap { .. } => tool_sag(model),
+        Piece::Strip { frame, .. } => {
+            let c = slot_corners(slot);
+            let pn = c.map(|(p, j)| {
+                let f = frame + p as u32;
+                let m = model.curve(f)[j];
+                (m, point_normal(model, f, m))
+            });
+            let mut sag: f64 = 0.0;
+            for (i, k) in [(0, 1), (1, 2), (2, 0)] {
+                let (pi, ni) = pn[i];
+                let (pk, nk) = pn[k];
+                sag = sag.max(pi.distance(pk) * ni.distance(nk));
+            }
+            sag * 1.1 / 8.0
+        }
+    }
+}
+
+/// The refinement context: the toolpath's moves, the cutter's puck, the line bounds.
+struct Refiner<'a> {
+    models: &'a [&'a SweepModel],
+    toolpath: &'a Toolpath,
+    puck: Puck,
+}
+
+impl Refiner<'_> {
+    fn geometry(&self, mv: u32) -> Option<MoveGeometry> {
+        let i = mv as usize;
+        (i >= 1 && i < self.toolpath.moves.len()).then(|| MoveGeometry {
+            a: self.toolpath.moves[i - 1].pose,
+            b: self.toolpath.moves[i].pose,
+            puck: self.puck,
+        })
+    }
+
+    /// Refines one crossing; `None` if it cannot be refined.
+    fn refine(&self, line: &Line, c: &Crossing) -> Option<Entry> {
+        let model = self.models[c.model as usize];
+        let (piece, slot) = unkey(c.key);
+        match model.pieces[piece] {
+            Piece::Cap { frame, .. } => {
+                let fr = &model.frames[frame as usize];
+                let g = MoveGeometry {
+                    a: cam_core::Pose {
+                        tip: fr.tip(self.puck.r),
+                        axis: fr.axis,
+                    },
+                    b: cam_core::Pose {
+                        tip: fr.tip(self.puck.r),
+                        axis: fr.axis,
+                    },
+                    puck: self.puck,
+                };
+                g.entry_at(line, 0.0)
+            }
+            Piece::Strip { frame, step } => {
+                let g = self.geometry(step.mv)?;
+                if g.is_translation() {
+                    return g.translation_entry(line);
+                }
+                self.refine_rotating(line, c, model, piece, slot, frame, step, &g)
+            }
+        }
+    }
+
+    /// The geometry of feed move `mv`, if it is one.
+    fn feed_geometry(&self, mv: u32) -> Option<MoveGeometry> {
+        let m = self.toolpath.moves.get(mv as usize)?;
+        (m.kind != cam_core::MoveKind::Rapid)
+            .then(|| self.geometry(mv))
+            .flatten()
+    }
+
+    /// Refines a crossing of a rotating move's strip: Newton on the move's continuous imprint
+    /// surface (a ball: the entry minimised over the pose parameter), else the entry
+    /// minimised over the step and its neighbours; where the step ends at a pose joining
+    /// another move, also the tool at that pose and the other move's surface near it (the
+    /// true surface there may be the tool at the joint, or the other move's sheet).
+    #[allow(clippy::too_many_arguments)]
+    fn refine_rotating(
+        &self,
+        line: &Line,
+        c: &Crossing,
+        model: &SweepModel,
+        piece: usize,
+        slot: usize,
+        frame: u32,
+        step: crate::model::StepParam,
+        g: &MoveGeometry,
+    ) -> Option<Entry> {
+        let mut best: Option<Entry> = None;
+        let mut take = |e: Option<Entry>| {
+            if let Some(e) = e
+                && best.is_none_or(|b| e.s < b.s)
+            {
+                best = Some(e);
+            }
+        };
+        let (u0, u1) = (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
+        let du = u1 - u0;
+        let (lo, hi) = ((u0 - du).max(0.0), (u1 + du).min(1.0));
+        // Guess: barycentric interpolation of the corners' (u, ψ), ψ in the body frame.
+        let guess = (self.puck.a > 0.0)
+            .then(|| {
+                let corners = oriented_corners(model, piece, slot)?;
+                let params = corners.map(|(p, j)| {
+                    let f = &model.frames[frame as usize + p];
+                    let y = model.curve(frame + p as u32)[j] - f.centre;
+                    let psi = y.dot(f.e2).atan2(y.dot(f.e1));
+                    (if p == 0 { step.u_from } else { step.u_to }, psi)
+                });
+                let (b1, b2) = c.bary;
+                let b0 = 1.0 - b1 - b2;
+                let base = params[0].1;
+                let unwrap = |x: f64| {
+                    base + (x - base + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                        - std::f64::consts::PI
+                };
+                let u = b0 * params[0].0 + b1 * params[1].0 + b2 * params[2].0;
+                let psi = b0 * base + b1 * unwrap(params[1].1) + b2 * unwrap(params[2].1);
+                Some((u, psi))
+            })
+            .flatten();
+        let body_at = |f: usize| {
+            let fr = &model.frames[f];
+            BodyFrame {
+                k_ref: fr.axis,
+                e1_ref: fr.e1,
+            }
+        };
+        // Body frame at the step's pose with parameter `u`: frame `frame` at u_from, the next
+        // at u_to.
+        let frame_at = |u: f64| {
+            if u == step.u_from {
+                frame as usize
+            } else {
+                frame as usize + 1
+            }
+        };
+        let own = guess
+            .and_then(|(u, psi)| g.imprint_entry(line, &body_at(frame as usize), [u, psi, c.s]))
+            .or_else(|| g.entry_min_over(line, lo, hi));
+        // Near a move end (the step's own or the solution's), the neighbouring move and the
+        // tool at the joint.
+        let u_sol = own.map_or(0.5 * (u0 + u1), |(_, u)| u);
+        take(own.map(|(e, _)| e));
+        let reach = 2.0 * du.max(1e-9);
+        for (touch, at, adj, u_adj) in [
+            (
+                u0 == 0.0 || u_sol <= reach,
+                0.0,
+                step.mv.checked_sub(1),
+                1.0,
+            ),
+            (
+                u1 == 1.0 || u_sol >= 1.0 - reach,
+                1.0,
+                Some(step.mv + 1),
+                0.0,
+            ),
+        ] {
+            if !touch {
+                continue;
+            }
+            take(g.entry_at(line, at));
+            let Some(ga) = adj.and_then(|m| self.feed_geometry(m)) else {
+                continue;
+            };
+            if ga.is_translation() {
+                take(ga.translation_entry(line));
+                continue;
+            }
+            // The joint's frame: the step's pose at `at` if it has one, else carried there.
+            let body = if (at == step.u_from) || (at == step.u_to) {
+                body_at(frame_at(at))
+            } else {
+                let (_, k) = g.centre_axis(at);
+                let b0 = body_at(frame as usize);
+                BodyFrame {
+                    k_ref: k,
+                    e1_ref: crate::imprint::minimal_rotation(b0.e1_ref, b0.k_ref, k),
+                }
+            };
+            let near = if u_adj == 1.0 { (0.5, 1.0) } else { (0.0, 0.5) };
+            let adj_entry = guess
+                .and_then(|(_, psi)| ga.imprint_entry(line, &body, [u_adj, psi, c.s]))
+                .or_else(|| ga.entry_min_over(line, near.0, near.1));
+            take(adj_entry.map(|(e, _)| e));
+        }
+        best
+    }
+
+    /// A key naming what a refinement of `c` computes, to refine it once per vector.
+    fn identity(&self, c: &Crossing) -> (u8, u64) {
+        let model = self.models[c.model as usize];
+        let (piece, _) = unkey(c.key);
+        match model.pieces[piece] {
+            Piece::Strip { step, .. } => match self.geometry(step.mv) {
+                // The whole move's volume: the same for every strip of the move, either sweep.
+                Some(g) if g.is_translation() => (u8::MAX, step.mv as u64),
+                _ => (c.model, piece as u64),
+            },
+            Piece::Cap { .. } => (c.model, piece as u64),
+        }
+    }
+}
+
+/// The caps of the models (the tool at one pose each), searched exactly in
+/// [`SurfaceModel::Exact`]: a hierarchy of their bounding spheres (radius `R` about the torus
+/// centre holds the whole puck).
+struct Caps {
+    /// `(model, piece)`, torus centre and axis, per cap, in tree order.
+    caps: Vec<(u8, u32, DVec3, DVec3)>,
+    /// Nodes: box and, for a leaf, the cap range; inner nodes point at two children.
+    nodes: Vec<(DVec3, DVec3, u32, u32)>,
+    radius: f64,
+}
+
+impl Caps {
+    fn new(models: &[&SweepModel]) -> Caps {
+        let mut caps = Vec::new();
+        for (mi, m) in models.iter().enumerate() {
+            for (pi, p) in m.pieces.iter().enumerate() {
+                if let Piece::Cap { frame, .. } = *p {
+                    let f = &m.frames[frame as usize];
+                    caps.push((mi as u8, pi as u32, f.centre, f.axis));
+                }
+            }
+        }
+        let radius = models.first().map_or(0.0, |m| m.cutter().radius());
+        let codes = crate::locate::morton_codes(&caps.iter().map(|c| c.2).collect::<Vec<_>>());
+        let mut order: Vec<(u64, usize)> =
+            codes.into_iter().enumerate().map(|(i, c)| (c, i)).collect();
+        order.sort_unstable();
+        let caps: Vec<_> = order.iter().map(|&(_, i)| caps[i]).collect();
+        let mut c = Caps {
+            caps,
+            nodes: Vec::new(),
+            radius,
+        };
+        if !c.caps.is_empty() {
+            c.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+            c.build(0, 0, c.caps.len());
+        }
+        c
+    }
+
+    fn build(&mut self, ni: usize, lo: usize, hi: usize) {
+        let r = DVec3::splat(self.radius * (1.0 + 1e-12) + 1e-9);
+        if hi - lo <= 2 {
+            let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for c in &self.caps[lo..hi] {
+                a = a.min(c.2 - r);
+                b = b.max(c.2 + r);
+            }
+            self.nodes[ni] = (a, b, lo as u32, (hi - lo) as u32);
+            return;
+        }
+        let left = self.nodes.len();
+        self.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+        self.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+        let mid = (lo + hi) / 2;
+        self.build(left, lo, mid);
+        self.build(left + 1, mid, hi);
+        let (l, rr) = (self.nodes[left], self.nodes[left + 1]);
+        self.nodes[ni] = (l.0.min(rr.0), l.1.max(rr.1), left as u32, 0);
+    }
+
+    /// Calls `f` for every cap whose bounding sphere the segment `lo..hi(current)` of `line`
+    /// meets; `f` returns the new upper end of the segment.
+    fn visit(&self, line: &Line, mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        let mut stack = vec![0u32];
+        while let Some(ni) = stack.pop() {
+            let (a, b, first, count) = self.nodes[ni as usize];
+            if !segment_box(line.o, inv, a, b, line.lo, hi) {
+                continue;
+            }
+            if count == 0 {
+                stack.push(first + 1);
+                stack.push(first);
+                continue;
+            }
+            for ci in first as usize..(first + count) as usize {
+                let c = self.caps[ci].2;
+                // Sphere entry: no point of the cap is nearer.
+                let m = line.o - c;
+                let bq = m.dot(line.n);
+                let disc = bq * bq - (m.length_squared() - self.radius * self.radius);
+                if disc < 0.0 || -bq - disc.sqrt() > hi || -bq + disc.sqrt() < line.lo {
+                    continue;
+                }
+                hi = f(ci, hi);
+            }
+        }
+    }
+}
+
+/// Whether the segment `o + s·n`, `s ∈ [t0, t1]`, meets the box (boundary included).
+fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
+    let (mut lo, mut hi) = (t0, t1);
+    for a in 0..3 {
+        if inv[a].is_infinite() {
+            if o[a] < min[a] || o[a] > max[a] {
+                return false;
+            }
+            continue;
+        }
+        let ta = (min[a] - o[a]) * inv[a];
+        let tb = (max[a] - o[a]) * inv[a];
+        let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+        lo = lo.max(ta);
+        hi = hi.min(tb);
+        if lo > hi {
+            return false;
+        }
+    }
+    true
+}
+
+/// How crossings are located: the fast tile search, or the brute-force reference (tests).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Locator {
+    /// [`crate::locate::locate`].
+    Fast,
+    /// [`crate::locate::locate_reference`] and every cap tested.
+    Reference,
+}
+
+/// Measures the signed deviation of every vertex of `refined` against the swept surfaces
+/// `models` of `toolpath`. Parallel; the result does not depend on the number of threads.
+///
+/// # Errors
+/// [`DeviationError::BadLength`] for negative or non-finite vector lengths.
+pub fn measure(
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+) -> Result<Measurement, DeviationError> {
+    measure_with(refined, models, toolpath, cfg, surface, Locator::Fast)
+}
+
+/// [`measure`] with a choice of locator: [`Locator::Reference`] must give the same result
+/// (it is the straightforward method the fast one is tested against).
+///
+/// # Errors
+/// As [`measure`].
+pub fn measure_with(
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+    locator: Locator,
+) -> Result<Measurement, DeviationError> {
+    let ok = |x: f64| x.is_finite() && x >= 0.0;
+    if !ok(cfg.inside_mm) || !ok(cfg.outside_mm) {
+        return Err(DeviationError::BadLength {
+            inside_mm: cfg.inside_mm,
+            outside_mm: cfg.outside_mm,
+        });
+    }
+    let vectors: Vec<Vector> = refined
+        .positions
+        .iter()
+        .zip(&refined.normals)
+        .map(|(&o, &n)| Vector {
+            o,
+            n,
+            lo: -cfg.inside_mm,
+            hi: cfg.outside_mm,
+        })
+        .collect();
+    Ok(measure_vectors(
+        &vectors, models, toolpath, cfg.facing, surface, locator,
+    ))
+}
+
+/// First entries of the lines `(origin, unit direction)` into the swept volume, for
+/// `s ∈ [0, max_mm]` along each: the method of [`measure`] on arbitrary lines (for
+/// validation against [`crate::envelope`]). `None` where nothing is entered.
+pub fn first_entries(
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    lines: &[(DVec3, DVec3)],
+    max_mm: f64,
+    surface: SurfaceModel,
+) -> Vec<Option<f64>> {
+    let vectors: Vec<Vector> = lines
+        .iter()
+        .map(|&(o, n)| Vector {
+            o,
+            n,
+            lo: 0.0,
+            hi: max_mm,
+        })
+        .collect();
+    measure_vectors(
+        &vectors,
+        models,
+        toolpath,
+        Facing::AgainstVector,
+        surface,
+        Locator::Fast,
+    )
+    .deviations
+    .iter()
+    .map(|d| d.signed_mm)
+    .collect()
+}
+
+/// The measurement for explicit vectors.
+fn measure_vectors(
+    vectors: &[Vector],
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    facing: Facing,
+    surface: SurfaceModel,
+    locator: Locator,
+) -> Measurement {
+    let exact = surface == SurfaceModel::Exact;
+    let vectors = vectors.to_vec();
+    let delta = window(models);
+    // Exact: caps are tested exactly below, the triangles locate strips only.
+    let found = match locator {
+        Locator::Fast => {
+            let bvhs: Vec<PatchBvh> = models.iter().map(|m| PatchBvh::new(m, !exact)).collect();
+            let pairs: Vec<(&SweepModel, &PatchBvh)> = models.iter().copied().zip(&bvhs).collect();
+            locate(&pairs, &vectors, delta)
+        }
+        Locator::Reference => crate::locate::locate_reference(models, &vectors, delta, !exact),
+    };
+    let puck = models
+        .first()
+        .map_or(Puck { a: 0.0, r: 0.0 }, |m| Puck::of(m.cutter()));
+    let rf = Refiner {
+        models,
+        toolpath,
+        puck,
+    };
+    let caps = exact.then(|| Caps::new(models));
+    let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
+    let move_of = |c: &Crossing| {
+        let (piece, _) = unkey(c.key);
+        models[c.model as usize].pieces[piece].source_move()
+    };
+    type PerVector = (Deviation, f64, Option<f64>, Option<(u8, u32)>, [usize; 5]);
+    let per: Vec<PerVector> = vectors
+        .par_iter()
+        .zip(found.par_iter())
+        .map(|(v, f)| {
+            let mut stats = [0usize; 5];
+            let dev = |s: Option<f64>, mv: Option<u32>| Deviation {
+                position: v.o,
+                normal: v.n,
+                signed_mm: s,
+                source_move: mv,
+            };
+            stats[4] = usize::from(f.overflow);
+            let low = f.crossings.first();
+            let linear = low.map(|l| (l.s, move_of(l), l.facing));
+            let low_src = low.map(|l| (l.model, unkey(l.key).0 as u32));
+            if !exact {
+                stats[0] = usize::from(low.is_some());
+                return match linear {
+                    Some((s, mv, fc)) => (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats),
+                    None => (dev(None, None), 0.0, None, None, stats),
+                };
+            }
+            let line = Line {
+                o: v.o,
+                n: v.n,
+                lo: v.lo,
+                hi: v.hi,
+            };
+            // Best refined entry: (entry, move, order key).
+            let mut best: Option<(Entry, u32, (u8, u64))> = None;
+            let better =
+                |e: Entry, mv: u32, k: (u8, u64), best: &mut Option<(Entry, u32, (u8, u64))>| {
+                    if facing_ok(e.normal.dot(v.n))
+                        && best.is_none_or(|(b, _, bk)| e.s < b.s || (e.s == b.s && k < bk))
+                    {
+                        *best = Some((e, mv, k));
+                    }
+                };
+            let mut done: Vec<(u8, u64)> = Vec::new();
+            if let Some(low) = low {
+                for c in &f.crossings {
+                    let id = rf.identity(c);
+                    if done.contains(&id) {
+                        continue;
+                    }
+                    let (piece, slot) = unkey(c.key);
+                    let m = models[c.model as usize];
+                    let d = (SAFETY * sag_of(m, piece, slot) / c.facing.abs().max(MIN_FACING))
+                        .min(delta);
+                    if c.s > low.s + d {
+                        continue;
+                    }
+                    done.push(id);
+                    stats[1] += 1;
+                    if let Some(e) = rf.refine(&line, c) {
+                        better(e, move_of(c), (c.model, c.key), &mut best);
+                    }
+                }
+            }
+            if let Some(caps) = &caps {
+                let hi = best.map_or(v.hi, |b| b.0.s);
+                caps.visit(&line, hi, |ci, hi| {
+                    let (mi, pi, c, k) = caps.caps[ci];
+                    let g = MoveGeometry {
+                        a: cam_core::Pose {
+                            tip: c - puck.r * k,
+                            axis: k,
+                        },
+                        b: cam_core::Pose {
+                            tip: c - puck.r * k,
+                            axis: k,
+                        },
+                        puck,
+                    };
+                    let seg = Line { hi, ..line };
+                    if let Some(e) = g.entry_at(&seg, 0.0) {
+                        stats[1] += 1;
+                        let mv = models[mi as usize].pieces[pi as usize].source_move();
+                        better(e, mv, (mi, (pi as u64) << 32), &mut best);
+                    }
+                    best.map_or(hi, |b| b.0.s.min(hi))
+                });
+            }
+            match (best, linear) {
+                (Some((e, mv, (mi, key))), _) => {
+                    stats[0] = 1;
+                    stats[2] = 1;
+                    let lin = linear.map(|l| l.0);
+                    let src = Some((mi, unkey(key).0 as u32));
+                    (dev(Some(e.s), Some(mv)), e.normal.dot(v.n), lin, src, stats)
+                }
+                (None, Some((s, mv, fc))) => {
+                    // Crossings located but none refined: keep the linear value.
+                    stats[0] = 1;
+                    stats[3] = 1;
+                    (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats)
+                }
+                (None, None) => (dev(None, None), 0.0, None, None, stats),
+            }
+        })
+        .collect();
+    let mut stats = MeasureStats::default();
+    let mut deviations = Vec::with_capacity(per.len());
+    let mut facings = Vec::with_capacity(per.len());
+    let mut linear_mm = Vec::with_capacity(per.len());
+    let mut source = Vec::with_capacity(per.len());
+    for (d, fc, l, src, s) in per {
+        deviations.push(d);
+        facings.push(fc);
+        linear_mm.push(l);
+        source.push(src);
+        stats.crossed += s[0];
+        stats.refinements += s[1];
+        stats.refined += s[2];
+        stats.kept_linear += s[3];
+        stats.overflow += s[4];
+    }
+    Measurement {
+        deviations,
+        facing: facings,
+        linear_mm,
+        source,
+        stats,
+    }
+}
