@@ -369,6 +369,7 @@ impl Patch {
             (lo, hi)
         };
         match model.pieces[i] {
+            Piece::Gap { .. } => {}
             Piece::Strip { frame, .. } => {
                 let (c0, c1) = (model.curve(frame), model.curve(frame + 1));
                 let (a0, a1) = (self.a0 as usize, self.a1 as usize);
@@ -429,6 +430,7 @@ impl Patch {
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         let i = self.piece as usize;
         match model.pieces[i] {
+            Piece::Gap { .. } => {}
             Piece::Strip { frame, .. } => {
                 let (c0, c1) = (model.curve(frame), model.curve(frame + 1));
                 for j in self.a0 as usize..=self.a1 as usize {
@@ -462,6 +464,7 @@ impl Patch {
 fn patches_of(model: &SweepModel, i: usize, out: &mut Vec<Patch>) {
     let piece = i as u32;
     match model.pieces[i] {
+        Piece::Gap { .. } => {}
         Piece::Strip { .. } => {
             let quads = model.per_curve() - 1;
             let mut a = 0;

@@ -62,28 +62,37 @@ pub struct Measurement {
     pub facing: Vec<f64>,
     /// Per vertex: the lowest crossing of the piecewise-linear surface (mm).
     pub linear_mm: Vec<Option<f64>>,
-    /// Per vertex: the model (index into the models measured) and piece that gave the answer.
-    pub source: Vec<Option<(u8, u32)>>,
+    /// Per vertex: what gave the answer (for the depth at creases).
+    pub source: Vec<Option<Source>>,
     /// What was done.
     pub stats: MeasureStats,
 }
 
-/// How deep (mm) `p` lies inside the volume swept by the move of piece `source`
-/// `(model, piece)` (for a cap, the tool at its pose): `r` minus the distance to the swept
-/// disk ([`MoveGeometry::depth_at`]); 0 when outside.
-pub fn depth_inside(
-    models: &[&SweepModel],
-    toolpath: &Toolpath,
-    source: (u8, u32),
-    p: DVec3,
-) -> f64 {
-    let Some(m) = models.get(source.0 as usize) else {
+/// What a measured value is the entry into.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// The volume swept along toolpath move `mv` (index into `Toolpath::moves`).
+    Move(u32),
+    /// The tool at one pose: frame `frame` of model `model`.
+    Pose {
+        /// Index of the model in the slice measured.
+        model: u8,
+        /// Frame index in that model.
+        frame: u32,
+    },
+}
+
+/// How deep (mm) `p` lies inside the volume of `source` (a move's swept volume or the tool
+/// at a pose): `r` minus the distance to the swept disk ([`MoveGeometry::depth_at`]); 0
+/// when outside.
+pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source, p: DVec3) -> f64 {
+    let Some(first) = models.first() else {
         return 0.0;
     };
-    let puck = Puck::of(m.cutter());
-    let g = match m.pieces.get(source.1 as usize) {
-        Some(Piece::Strip { step, .. }) => {
-            let i = step.mv as usize;
+    let puck = Puck::of(first.cutter());
+    let g = match source {
+        Source::Move(mv) => {
+            let i = mv as usize;
             if i == 0 || i >= toolpath.moves.len() {
                 return 0.0;
             }
@@ -93,8 +102,13 @@ pub fn depth_inside(
                 puck,
             }
         }
-        Some(Piece::Cap { frame, .. }) => {
-            let f = &m.frames[*frame as usize];
+        Source::Pose { model, frame } => {
+            let Some(f) = models
+                .get(model as usize)
+                .and_then(|m| m.frames.get(frame as usize))
+            else {
+                return 0.0;
+            };
             let pose = cam_core::Pose {
                 tip: f.tip(puck.r),
                 axis: f.axis,
@@ -105,7 +119,6 @@ pub fn depth_inside(
                 puck,
             }
         }
-        None => return 0.0,
     };
     g.depth_at(p)
 }
@@ -178,7 +191,7 @@ fn oriented_corners(model: &SweepModel, piece: usize, slot: usize) -> Option<[(u
 /// taken as the chord `|n_i − n_j|` of the unit normals, times 1.1 to cover the arc).
 fn sag_of(model: &SweepModel, piece: usize, slot: usize) -> f64 {
     match model.pieces[piece] {
-        Piece::Cap { .. } => tool_sag(model),
+        Piece::Cap { .. } | Piece::Gap { .. } => tool_sag(model),
         Piece::Strip { frame, .. } => {
             let c = slot_corners(slot);
             let pn = c.map(|(p, j)| {
@@ -214,11 +227,13 @@ impl Refiner<'_> {
         })
     }
 
-    /// Refines one crossing; `None` if it cannot be refined.
-    fn refine(&self, line: &Line, c: &Crossing) -> Option<Entry> {
+    /// Refines one crossing: the entry and the move (or, for a cap, the move it is attributed
+    /// to) it lies on; `None` if it cannot be refined.
+    fn refine(&self, line: &Line, c: &Crossing) -> Option<(Entry, u32)> {
         let model = self.models[c.model as usize];
         let (piece, slot) = unkey(c.key);
         match model.pieces[piece] {
+            Piece::Gap { .. } => None,
             Piece::Cap { frame, .. } => {
                 let fr = &model.frames[frame as usize];
                 let g = MoveGeometry {
@@ -233,11 +248,12 @@ impl Refiner<'_> {
                     puck: self.puck,
                 };
                 g.entry_at(line, 0.0)
+                    .map(|e| (e, model.pieces[piece].source_move()))
             }
             Piece::Strip { frame, step } => {
                 let g = self.geometry(step.mv)?;
                 if g.is_translation() {
-                    return g.translation_entry(line);
+                    return g.translation_entry(line).map(|e| (e, step.mv));
                 }
                 self.refine_rotating(line, c, model, piece, slot, frame, step, &g)
             }
@@ -268,13 +284,13 @@ impl Refiner<'_> {
         frame: u32,
         step: crate::model::StepParam,
         g: &MoveGeometry,
-    ) -> Option<Entry> {
-        let mut best: Option<Entry> = None;
-        let mut take = |e: Option<Entry>| {
+    ) -> Option<(Entry, u32)> {
+        let mut best: Option<(Entry, u32)> = None;
+        let mut take = |e: Option<Entry>, mv: u32| {
             if let Some(e) = e
-                && best.is_none_or(|b| e.s < b.s)
+                && best.is_none_or(|(b, _)| e.s < b.s)
             {
-                best = Some(e);
+                best = Some((e, mv));
             }
         };
         let (u0, u1) = (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
@@ -324,7 +340,7 @@ impl Refiner<'_> {
         // Near a move end (the step's own or the solution's), the neighbouring move and the
         // tool at the joint.
         let u_sol = own.map_or(0.5 * (u0 + u1), |(_, u)| u);
-        take(own.map(|(e, _)| e));
+        take(own.map(|(e, _)| e), step.mv);
         let reach = 2.0 * du.max(1e-9);
         for (touch, at, adj, u_adj) in [
             (
@@ -343,12 +359,12 @@ impl Refiner<'_> {
             if !touch {
                 continue;
             }
-            take(g.entry_at(line, at));
-            let Some(ga) = adj.and_then(|m| self.feed_geometry(m)) else {
+            take(g.entry_at(line, at), step.mv);
+            let Some((m, ga)) = adj.and_then(|m| Some((m, self.feed_geometry(m)?))) else {
                 continue;
             };
             if ga.is_translation() {
-                take(ga.translation_entry(line));
+                take(ga.translation_entry(line), m);
                 continue;
             }
             // The joint's frame: the step's pose at `at` if it has one, else carried there.
@@ -366,7 +382,7 @@ impl Refiner<'_> {
             let adj_entry = guess
                 .and_then(|(_, psi)| ga.imprint_entry(line, &body, [u_adj, psi, c.s]))
                 .or_else(|| ga.entry_min_over(line, near.0, near.1));
-            take(adj_entry.map(|(e, _)| e));
+            take(adj_entry.map(|(e, _)| e), m);
         }
         best
     }
@@ -381,58 +397,74 @@ impl Refiner<'_> {
                 Some(g) if g.is_translation() => (u8::MAX, step.mv as u64),
                 _ => (c.model, piece as u64),
             },
-            Piece::Cap { .. } => (c.model, piece as u64),
+            Piece::Cap { .. } | Piece::Gap { .. } => (c.model, piece as u64),
         }
     }
 }
 
-/// The caps of the models (the tool at one pose each), searched exactly in
-/// [`SurfaceModel::Exact`]: a hierarchy of their bounding spheres (radius `R` about the torus
-/// centre holds the whole puck).
-struct Caps {
-    /// `(model, piece)`, torus centre and axis, per cap, in tree order.
-    caps: Vec<(u8, u32, DVec3, DVec3)>,
-    /// Nodes: box and, for a leaf, the cap range; inner nodes point at two children.
+/// The pieces searched exactly in [`SurfaceModel::Exact`] rather than located by triangles:
+/// caps (the tool at one pose) and gaps (a step whose strip is missing because the imprinted
+/// half flips). A hierarchy of bounds: the sphere of radius `R` about a cap's torus centre
+/// holds its whole puck; the capsule of radius `R` about a gap's centre segment holds its
+/// step's swept volume.
+struct Extras {
+    /// `(model, piece, centre at the first pose, centre at the second)`, in tree order.
+    items: Vec<(u8, u32, DVec3, DVec3)>,
+    /// Nodes: box and, for a leaf, the item range; inner nodes point at two children.
     nodes: Vec<(DVec3, DVec3, u32, u32)>,
     radius: f64,
 }
 
-impl Caps {
-    fn new(models: &[&SweepModel]) -> Caps {
-        let mut caps = Vec::new();
+impl Extras {
+    fn new(models: &[&SweepModel]) -> Extras {
+        let mut items = Vec::new();
         for (mi, m) in models.iter().enumerate() {
             for (pi, p) in m.pieces.iter().enumerate() {
-                if let Piece::Cap { frame, .. } = *p {
-                    let f = &m.frames[frame as usize];
-                    caps.push((mi as u8, pi as u32, f.centre, f.axis));
+                match *p {
+                    Piece::Cap { frame, .. } => {
+                        let c = m.frames[frame as usize].centre;
+                        items.push((mi as u8, pi as u32, c, c));
+                    }
+                    Piece::Gap { frame, .. } => {
+                        let (a, b) = (
+                            m.frames[frame as usize].centre,
+                            m.frames[frame as usize + 1].centre,
+                        );
+                        items.push((mi as u8, pi as u32, a, b));
+                    }
+                    Piece::Strip { .. } => {}
                 }
             }
         }
-        let radius = models.first().map_or(0.0, |m| m.cutter().radius());
-        let codes = crate::locate::morton_codes(&caps.iter().map(|c| c.2).collect::<Vec<_>>());
+        // A step rotating the axis moves its centre along a slightly curved path: pad.
+        let radius = models
+            .first()
+            .map_or(0.0, |m| m.cutter().radius() * (1.0 + 1e-9) + 1e-9);
+        let mids: Vec<DVec3> = items.iter().map(|c| 0.5 * (c.2 + c.3)).collect();
+        let codes = crate::locate::morton_codes(&mids);
         let mut order: Vec<(u64, usize)> =
             codes.into_iter().enumerate().map(|(i, c)| (c, i)).collect();
         order.sort_unstable();
-        let caps: Vec<_> = order.iter().map(|&(_, i)| caps[i]).collect();
-        let mut c = Caps {
-            caps,
+        let items: Vec<_> = order.iter().map(|&(_, i)| items[i]).collect();
+        let mut e = Extras {
+            items,
             nodes: Vec::new(),
             radius,
         };
-        if !c.caps.is_empty() {
-            c.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
-            c.build(0, 0, c.caps.len());
+        if !e.items.is_empty() {
+            e.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+            e.build(0, 0, e.items.len());
         }
-        c
+        e
     }
 
     fn build(&mut self, ni: usize, lo: usize, hi: usize) {
-        let r = DVec3::splat(self.radius * (1.0 + 1e-12) + 1e-9);
+        let r = DVec3::splat(self.radius);
         if hi - lo <= 2 {
             let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for c in &self.caps[lo..hi] {
-                a = a.min(c.2 - r);
-                b = b.max(c.2 + r);
+            for c in &self.items[lo..hi] {
+                a = a.min(c.2.min(c.3) - r);
+                b = b.max(c.2.max(c.3) + r);
             }
             self.nodes[ni] = (a, b, lo as u32, (hi - lo) as u32);
             return;
@@ -447,8 +479,8 @@ impl Caps {
         self.nodes[ni] = (l.0.min(rr.0), l.1.max(rr.1), left as u32, 0);
     }
 
-    /// Calls `f` for every cap whose bounding sphere the segment `lo..hi(current)` of `line`
-    /// meets; `f` returns the new upper end of the segment.
+    /// Calls `f` for every item whose bound the segment `lo..hi(current)` of `line` meets;
+    /// `f` returns the new upper end of the segment.
     fn visit(&self, line: &Line, mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
         if self.nodes.is_empty() {
             return;
@@ -466,12 +498,9 @@ impl Caps {
                 continue;
             }
             for ci in first as usize..(first + count) as usize {
-                let c = self.caps[ci].2;
-                // Sphere entry: no point of the cap is nearer.
-                let m = line.o - c;
-                let bq = m.dot(line.n);
-                let disc = bq * bq - (m.length_squared() - self.radius * self.radius);
-                if disc < 0.0 || -bq - disc.sqrt() > hi || -bq + disc.sqrt() < line.lo {
+                let (_, _, c0, c1) = self.items[ci];
+                let seg = Line { hi, ..*line };
+                if crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none() {
                     continue;
                 }
                 hi = f(ci, hi);
@@ -624,13 +653,13 @@ fn measure_vectors(
         toolpath,
         puck,
     };
-    let caps = exact.then(|| Caps::new(models));
+    let extras = exact.then(|| Extras::new(models));
     let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
     let move_of = |c: &Crossing| {
         let (piece, _) = unkey(c.key);
         models[c.model as usize].pieces[piece].source_move()
     };
-    type PerVector = (Deviation, f64, Option<f64>, Option<(u8, u32)>, [usize; 5]);
+    type PerVector = (Deviation, f64, Option<f64>, Option<Source>, [usize; 5]);
     let per: Vec<PerVector> = vectors
         .par_iter()
         .zip(found.par_iter())
@@ -645,7 +674,17 @@ fn measure_vectors(
             stats[4] = usize::from(f.overflow);
             let low = f.crossings.first();
             let linear = low.map(|l| (l.s, move_of(l), l.facing));
-            let low_src = low.map(|l| (l.model, unkey(l.key).0 as u32));
+            let source_of = |c: &Crossing| {
+                let m = models[c.model as usize];
+                match m.pieces[unkey(c.key).0] {
+                    Piece::Strip { step, .. } | Piece::Gap { step, .. } => Source::Move(step.mv),
+                    Piece::Cap { frame, .. } => Source::Pose {
+                        model: c.model,
+                        frame,
+                    },
+                }
+            };
+            let low_src = low.map(source_of);
             if !exact {
                 stats[0] = usize::from(low.is_some());
                 return match linear {
@@ -659,16 +698,16 @@ fn measure_vectors(
                 lo: v.lo,
                 hi: v.hi,
             };
-            // Best refined entry: (entry, move, order key).
-            let mut best: Option<(Entry, u32, (u8, u64))> = None;
-            let better =
-                |e: Entry, mv: u32, k: (u8, u64), best: &mut Option<(Entry, u32, (u8, u64))>| {
-                    if facing_ok(e.normal.dot(v.n))
-                        && best.is_none_or(|(b, _, bk)| e.s < b.s || (e.s == b.s && k < bk))
-                    {
-                        *best = Some((e, mv, k));
-                    }
-                };
+            // Best refined entry: (entry, move, order key, source).
+            type Best = Option<(Entry, u32, (u8, u64), Source)>;
+            let mut best: Best = None;
+            let better = |e: Entry, mv: u32, k: (u8, u64), src: Source, best: &mut Best| {
+                if facing_ok(e.normal.dot(v.n))
+                    && best.is_none_or(|(b, _, bk, _)| e.s < b.s || (e.s == b.s && k < bk))
+                {
+                    *best = Some((e, mv, k, src));
+                }
+            };
             let mut done: Vec<(u8, u64)> = Vec::new();
             if let Some(low) = low {
                 for c in &f.crossings {
@@ -685,42 +724,112 @@ fn measure_vectors(
                     }
                     done.push(id);
                     stats[1] += 1;
-                    if let Some(e) = rf.refine(&line, c) {
-                        better(e, move_of(c), (c.model, c.key), &mut best);
+                    if let Some((e, mv)) = rf.refine(&line, c) {
+                        let src = match source_of(c) {
+                            Source::Move(_) => Source::Move(mv),
+                            p => p,
+                        };
+                        better(e, mv, (c.model, c.key), src, &mut best);
+                    }
+                    // A translation's neighbours at the step's ends: near a joint the other
+                    // move's volume may be the lower one.
+                    if let Piece::Strip { step, .. } = m.pieces[piece]
+                        && id.0 == u8::MAX
+                    {
+                        let ends = [
+                            (step.u_from.min(step.u_to) == 0.0, step.mv.checked_sub(1)),
+                            (step.u_from.max(step.u_to) == 1.0, Some(step.mv + 1)),
+                        ];
+                        for (touch, adj) in ends {
+                            let Some(am) = adj.filter(|_| touch) else {
+                                continue;
+                            };
+                            let Some(ga) = rf.feed_geometry(am).filter(|g| g.is_translation())
+                            else {
+                                continue;
+                            };
+                            let aid = (u8::MAX, am as u64);
+                            if done.contains(&aid) {
+                                continue;
+                            }
+                            done.push(aid);
+                            stats[1] += 1;
+                            if let Some(e) = ga.translation_entry(&line) {
+                                better(e, am, aid, Source::Move(am), &mut best);
+                            }
+                        }
                     }
                 }
             }
-            if let Some(caps) = &caps {
+            if let Some(extras) = &extras {
                 let hi = best.map_or(v.hi, |b| b.0.s);
-                caps.visit(&line, hi, |ci, hi| {
-                    let (mi, pi, c, k) = caps.caps[ci];
-                    let g = MoveGeometry {
-                        a: cam_core::Pose {
-                            tip: c - puck.r * k,
-                            axis: k,
-                        },
-                        b: cam_core::Pose {
-                            tip: c - puck.r * k,
-                            axis: k,
-                        },
-                        puck,
-                    };
+                extras.visit(&line, hi, |ci, hi| {
+                    let (mi, pi, c, _) = extras.items[ci];
+                    let model = models[mi as usize];
                     let seg = Line { hi, ..line };
-                    if let Some(e) = g.entry_at(&seg, 0.0) {
-                        stats[1] += 1;
-                        let mv = models[mi as usize].pieces[pi as usize].source_move();
-                        better(e, mv, (mi, (pi as u64) << 32), &mut best);
+                    match model.pieces[pi as usize] {
+                        Piece::Cap { frame, mv } => {
+                            let k = model.frames[frame as usize].axis;
+                            let pose = cam_core::Pose {
+                                tip: c - puck.r * k,
+                                axis: k,
+                            };
+                            let g = MoveGeometry {
+                                a: pose,
+                                b: pose,
+                                puck,
+                            };
+                            stats[1] += 1;
+                            if let Some(e) = g.entry_at(&seg, 0.0) {
+                                let src = Source::Pose { model: mi, frame };
+                                better(e, mv, (mi, (pi as u64) << 32), src, &mut best);
+                            }
+                        }
+                        Piece::Gap { step, .. } => {
+                            let Some(g) = rf.feed_geometry(step.mv) else {
+                                return hi;
+                            };
+                            let id = if g.is_translation() {
+                                (u8::MAX, step.mv as u64)
+                            } else {
+                                (mi, pi as u64)
+                            };
+                            if done.contains(&id) {
+                                return hi;
+                            }
+                            done.push(id);
+                            stats[1] += 1;
+                            let e = if g.is_translation() {
+                                g.translation_entry(&seg)
+                            } else {
+                                let (u0, u1) =
+                                    (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
+                                let du = u1 - u0;
+                                g.entry_min_over(&seg, (u0 - du).max(0.0), (u1 + du).min(1.0))
+                                    .map(|(e, _)| e)
+                            };
+                            if let Some(e) = e {
+                                let k = (id.0, ((pi as u64) << 32) | (id.1 & 0xffff_ffff));
+                                better(e, step.mv, k, Source::Move(step.mv), &mut best);
+                            }
+                        }
+                        Piece::Strip { .. } => {}
                     }
                     best.map_or(hi, |b| b.0.s.min(hi))
                 });
             }
             match (best, linear) {
-                (Some((e, mv, (mi, key))), _) => {
+                (Some((e, mv, _, src)), _) => {
                     stats[0] = 1;
                     stats[2] = 1;
                     let lin = linear.map(|l| l.0);
-                    let src = Some((mi, unkey(key).0 as u32));
-                    (dev(Some(e.s), Some(mv)), e.normal.dot(v.n), lin, src, stats)
+                    (
+                        dev(Some(e.s), Some(mv)),
+                        e.normal.dot(v.n),
+                        lin,
+                        Some(src),
+                        stats,
+                    )
                 }
                 (None, Some((s, mv, fc))) => {
                     // Crossings located but none refined: keep the linear value.

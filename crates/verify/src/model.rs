@@ -47,20 +47,29 @@ pub enum Piece {
         /// The move the cap is attributed to.
         mv: u32,
     },
+    /// A step with no strip because the imprinted half flips between its poses (caps at both
+    /// poses stand for it on the imprint surface). No triangles; the exact measurement
+    /// searches the step's move directly.
+    Gap {
+        /// Index of the step's first pose in [`SweepModel::frames`].
+        frame: u32,
+        /// The move and the two poses' parameters on it.
+        step: StepParam,
+    },
 }
 
 impl Piece {
     /// The toolpath move this piece belongs to.
     pub fn source_move(&self) -> u32 {
         match *self {
-            Piece::Strip { step, .. } => step.mv,
+            Piece::Strip { step, .. } | Piece::Gap { step, .. } => step.mv,
             Piece::Cap { mv, .. } => mv,
         }
     }
-    /// Strip or cap.
+    /// Strip or cap (a gap, which has no triangles, counts as a strip).
     pub fn kind(&self) -> FacetKind {
         match self {
-            Piece::Strip { .. } => FacetKind::Strip,
+            Piece::Strip { .. } | Piece::Gap { .. } => FacetKind::Strip,
             Piece::Cap { .. } => FacetKind::Cap,
         }
     }
@@ -289,6 +298,10 @@ impl SweepModel {
                         frame: base + p as u32 + 1,
                         mv,
                     });
+                    pieces.push(Piece::Gap {
+                        frame: base + p as u32,
+                        step: seg.steps[p],
+                    });
                     continue;
                 }
                 pieces.push(Piece::Strip {
@@ -369,6 +382,7 @@ impl SweepModel {
         match self.pieces[i] {
             Piece::Strip { .. } => 2 * (self.per_curve - 1),
             Piece::Cap { .. } => self.inserts * self.cap_per_sector(),
+            Piece::Gap { .. } => 0,
         }
     }
 
@@ -399,7 +413,9 @@ impl SweepModel {
     /// The pose frame of piece `i`: a strip's first pose or a cap's pose.
     pub fn piece_frame(&self, i: usize) -> u32 {
         match self.pieces[i] {
-            Piece::Strip { frame, .. } | Piece::Cap { frame, .. } => frame,
+            Piece::Strip { frame, .. } | Piece::Cap { frame, .. } | Piece::Gap { frame, .. } => {
+                frame
+            }
         }
     }
 
@@ -412,7 +428,7 @@ impl SweepModel {
     /// test and orientation.
     fn raw_triangle(&self, i: usize, local: usize) -> [DVec3; 3] {
         match self.pieces[i] {
-            Piece::Strip { frame, .. } => {
+            Piece::Strip { frame, .. } | Piece::Gap { frame, .. } => {
                 let (c0, c1) = (self.curve(frame), self.curve(frame + 1));
                 let j = local / 2;
                 let (a, b, c, d) = (c0[j], c0[j + 1], c1[j + 1], c1[j]);
@@ -452,11 +468,11 @@ impl SweepModel {
     /// Triangle `local` of piece `i`, oriented away from the tool, or `None` when degenerate
     /// (exactly the triangle [`crate::sweep::sweep`] emits for that slot).
     pub fn triangle(&self, i: usize, local: usize) -> Option<Triangle> {
+        if local >= self.slots(i) {
+            return None;
+        }
         let t = self.raw_triangle(i, local);
-        let frame = match self.pieces[i] {
-            Piece::Strip { frame, .. } | Piece::Cap { frame, .. } => frame,
-        };
-        orient(t, self.inside(frame))
+        orient(t, self.inside(self.piece_frame(i)))
     }
 
     /// Calls `f(key, triangle)` for every triangle of piece `i`, in emission order.
@@ -482,6 +498,7 @@ impl SweepModel {
                     }
                 }
             }
+            Piece::Gap { .. } => {}
         }
     }
 }

@@ -3,6 +3,7 @@
 mod deviation;
 mod five_axis;
 mod imprint;
+mod measure;
 mod pipeline;
 mod refine;
 mod report;
