@@ -72,7 +72,16 @@ fn main() {
             tilt_deg: 3.0,
         };
         let path = pass(&spec, &cutter);
-        let env = BruteEnvelope::new(&path, &cutter, &EnvelopeConfig::default());
+        // The cutter's lower part, as the verifier models it (the real cutter's cylinder
+        // continues upward from the corner; lines near the pass edges could meet it first).
+        let env = BruteEnvelope::new(
+            &path,
+            &cutter,
+            &EnvelopeConfig {
+                height_mm: Some(2.0 * cutter.corner_radius()),
+                ..EnvelopeConfig::default()
+            },
+        );
         let u_end = u0 + (poses - 1) as f64 * step;
         let lines = normal_lines(
             &surface,

@@ -105,10 +105,15 @@ impl Puck {
 }
 
 const NEWTON_ITERS: usize = 80;
+/// A line point this close to a convex set (mm) is on it.
+const ROOT_TOL_MM: f64 = 1e-12;
 
 /// The first root of the convex function `f` on `[lo, hi]` by Newton's method from `lo`
-/// (`f` returns value and derivative). For convex `f` the iterates increase monotonically
-/// and stay left of the first root; a non-negative slope with `f > 0` proves there is none.
+/// (`f` returns value and gradient; the derivative is `gradient · n`). For convex `f` the
+/// iterates increase monotonically and stay left of the first root; a non-negative slope with
+/// `f > 0` proves there is none. Returns the root and the gradient at the last iterate still
+/// outside (`f > 0`): the outward normal there, well defined even for a set without
+/// thickness (a flat end mill's disk), where the gradient at the root itself is not.
 fn first_root_convex(
     lo: f64,
     hi: f64,
@@ -131,12 +136,14 @@ fn first_root_convex(
         }
         if next > hi {
             // Check the end: the root may lie just before it.
-            let (vh, gh) = f(hi);
-            return (vh <= 0.0).then_some((hi, gh));
+            let (vh, _) = f(hi);
+            return (vh <= 0.0).then_some((hi, g));
         }
         let (nv, ng) = f(next);
-        if nv <= 1e-14 || next - s <= 1e-15 * (1.0 + s.abs()) {
-            return Some((next, ng));
+        // On the surface to 1e-12 mm: the gradient there is not reliable any more (for a
+        // set without thickness it points anywhere), so stop with the last good one.
+        if nv <= ROOT_TOL_MM || next - s <= 1e-15 * (1.0 + s.abs()) {
+            return Some((next, g));
         }
         (s, v, g) = (next, nv, ng);
     }

@@ -15,10 +15,11 @@
 //!
 //! # What is kept
 //! Per vector: the lowest accepted crossing `s_min` (an entry: the triangle faces against
-//! the vector, as in [`crate::deviation`]) and, of all accepted crossings with
-//! `s ≤ s_min + δ`, the [`MAX_CANDIDATES`] lowest by `(s, key)`. That set depends only on the
-//! triangles, not on the order they are met, so it equals what [`locate_reference`] finds by
-//! testing every triangle, and it is the same for any number of threads.
+//! the vector, as in [`crate::deviation`]) and, of the accepted crossings with
+//! `s ≤ s_min + δ`, the lowest of each piece (strip or cap), the [`MAX_CANDIDATES`] lowest of
+//! those by `(s, key)`. That set depends only on the triangles, not on the order they are
+//! met, so it equals what [`locate_reference`] finds by testing every triangle, and it is the
+//! same for any number of threads.
 
 use cam_core::{DVec3, Triangle};
 use rayon::prelude::*;
@@ -29,7 +30,7 @@ use crate::model::{Piece, SweepModel, key};
 /// Vectors per tile.
 pub const TILE: usize = 64;
 /// Crossings kept per vector.
-pub const MAX_CANDIDATES: usize = 8;
+pub const MAX_CANDIDATES: usize = 64;
 /// Quads per strip patch.
 const STRIP_QUADS: usize = 4;
 /// Sectors per cap patch.
@@ -141,6 +142,17 @@ impl State {
         if c.s > self.hi {
             return shrank;
         }
+        // One crossing per piece: its lowest.
+        let piece = c.key >> 32;
+        if let Some(i) = self.cands[..self.len as usize]
+            .iter()
+            .position(|x| x.model == c.model && x.key >> 32 == piece)
+        {
+            if c.before(&self.cands[i]) {
+                self.cands[i] = c;
+            }
+            return shrank;
+        }
         let n = self.len as usize;
         if n == MAX_CANDIDATES {
             // Keep the lowest: drop the highest of the list and the new one.
@@ -183,25 +195,58 @@ struct Prepared {
     e1: DVec3,
     e2: DVec3,
     ll: f64,
+    /// Heights of the corners over their opposite edges (mm).
+    h: [f64; 3],
 }
 
 impl Prepared {
     fn new(key: u64, t: &Triangle) -> Prepared {
         let [a, b, c] = t.v;
         let (e1, e2) = (b - a, c - a);
+        let n = e1.cross(e2).length();
         Prepared {
             key,
             a,
             e1,
             e2,
             ll: e1.length() * e2.length(),
+            h: [n / (e2 - e1).length(), n / e2.length(), n / e1.length()],
         }
+    }
+
+    /// Distance (mm) from the point `a + u·e1 + v·e2` of the triangle's plane to the triangle
+    /// (0 inside): to the nearest of its edges.
+    fn outside(&self, u: f64, v: f64) -> f64 {
+        let p = u * self.e1 + v * self.e2;
+        let seg = |a: DVec3, b: DVec3| {
+            let ab = b - a;
+            let l2 = ab.length_squared();
+            let t = if l2 > 0.0 {
+                ((p - a).dot(ab) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            p.distance(a + t * ab)
+        };
+        let (a, b, c) = (DVec3::ZERO, self.e1, self.e2);
+        seg(a, b).min(seg(b, c)).min(seg(c, a))
     }
 
     /// Möller–Trumbore with inclusive barycentric bounds (as [`crate::deviation`]) for an
     /// entry (facing < 0) only: parameter, barycentrics of corners 1 and 2, and the facing
-    /// `unit normal · d`; `dl = |d|`.
-    fn entry(&self, o: DVec3, d: DVec3, dl: f64, t0: f64, t1: f64) -> Option<(f64, f64, f64, f64)> {
+    /// `unit normal · d`; `dl = |d|`. With `margin > 0` a line passing up to `margin` (mm)
+    /// outside the triangle counts too (the triangle's share of the band between a sheet's
+    /// chords and its curved edge).
+    #[inline]
+    fn entry(
+        &self,
+        o: DVec3,
+        d: DVec3,
+        dl: f64,
+        t0: f64,
+        t1: f64,
+        margin: f64,
+    ) -> Option<(f64, f64, f64, f64)> {
         const EPS: f64 = 1e-12;
         let (e1, e2) = (self.e1, self.e2);
         let pv = d.cross(e2);
@@ -213,13 +258,25 @@ impl Prepared {
         let inv = 1.0 / det;
         let tv = o - self.a;
         let u = tv.dot(pv) * inv;
-        if !(-EPS..=1.0 + EPS).contains(&u) {
+        if margin == 0.0 && !(-EPS..=1.0 + EPS).contains(&u) {
             return None;
         }
         let qv = tv.cross(e1);
         let v = d.dot(qv) * inv;
-        if v < -EPS || u + v > 1.0 + EPS {
-            return None;
+        let inside = (-EPS..=1.0 + EPS).contains(&u) && v >= -EPS && u + v <= 1.0 + EPS;
+        if !inside {
+            if margin == 0.0 {
+                return None;
+            }
+            // Beyond an edge's line by more than the margin: beyond the triangle too.
+            let w = [1.0 - u - v, u, v];
+            if (0..3).any(|i| -w[i] * self.h[i] > margin) {
+                return None;
+            }
+            let out = self.outside(u, v);
+            if out.is_nan() || out > margin {
+                return None;
+            }
         }
         let t = e2.dot(qv) * inv;
         if t < t0 || t > t1 {
@@ -242,8 +299,9 @@ pub fn entry_crossing(
     d: DVec3,
     t0: f64,
     t1: f64,
+    margin: f64,
 ) -> Option<(f64, f64, f64, f64)> {
-    Prepared::new(0, tri).entry(o, d, d.length(), t0, t1)
+    Prepared::new(0, tri).entry(o, d, d.length(), t0, t1, margin)
 }
 
 const NO_SLOT: u32 = u32::MAX;
@@ -260,8 +318,8 @@ struct Cell {
 }
 
 impl Cell {
-    fn new(lo: DVec3, hi: DVec3, slots: [u32; 2]) -> Cell {
-        let p = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
+    fn new(lo: DVec3, hi: DVec3, slots: [u32; 2], margin: f64) -> Cell {
+        let p = margin + 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
         Cell {
             lo: lo - DVec3::splat(p),
             hi: hi + DVec3::splat(p),
@@ -356,7 +414,7 @@ pub fn morton_codes(points: &[DVec3]) -> Vec<u64> {
 impl Patch {
     /// The patch's cells (a quad, or a cap's fan triangle) with their bounds in `tf`'s frame
     /// and their triangle slots, appended to `out`.
-    fn cells(&self, model: &SweepModel, tf: &TileFrame, out: &mut Vec<Cell>) {
+    fn cells(&self, model: &SweepModel, tf: &TileFrame, margin: f64, out: &mut Vec<Cell>) {
         let i = self.piece as usize;
         let bounds = |pts: &[DVec3]| {
             let mut lo = DVec3::splat(f64::INFINITY);
@@ -383,7 +441,7 @@ impl Patch {
                     let k = j - a0;
                     let lo = q0[k].min(q0[k + 1]).min(q1[k]).min(q1[k + 1]);
                     let hi = q0[k].max(q0[k + 1]).max(q1[k]).max(q1[k + 1]);
-                    out.push(Cell::new(lo, hi, [2 * j as u32, 2 * j as u32 + 1]));
+                    out.push(Cell::new(lo, hi, [2 * j as u32, 2 * j as u32 + 1], margin));
                 }
             }
             Piece::Cap { frame, .. } => {
@@ -403,7 +461,7 @@ impl Patch {
                                 model.cap_point(fr, s, 0),
                                 model.cap_point(fr, s + 1, 0),
                             ]);
-                            out.push(Cell::new(lo, hi, [base, NO_SLOT]));
+                            out.push(Cell::new(lo, hi, [base, NO_SLOT], margin));
                         }
                         k = 1;
                     }
@@ -416,7 +474,7 @@ impl Patch {
                                 model.cap_point(fr, s, g + 1),
                             ]);
                             let slot = base + k + 2 * g as u32;
-                            out.push(Cell::new(lo, hi, [slot, slot + 1]));
+                            out.push(Cell::new(lo, hi, [slot, slot + 1], margin));
                         }
                     }
                 }
@@ -511,9 +569,9 @@ fn patches_of(model: &SweepModel, i: usize, out: &mut Vec<Patch>) {
 
 impl PatchBvh {
     /// Builds the hierarchy over the patches of `model`'s strips, and of its caps when `caps`
-    /// (Morton order of the patch centres, median splits, one patch per leaf).
-    /// Deterministic.
-    pub fn new(model: &SweepModel, caps: bool) -> PatchBvh {
+    /// (Morton order of the patch centres, median splits, one patch per leaf), boxes padded by
+    /// `margin` (mm, the band around each triangle that [`locate`] accepts). Deterministic.
+    pub fn new(model: &SweepModel, caps: bool, margin: f64) -> PatchBvh {
         let per_piece: Vec<Vec<Patch>> = (0..model.pieces.len())
             .into_par_iter()
             .map(|i| {
@@ -525,7 +583,13 @@ impl PatchBvh {
             })
             .collect();
         let patches: Vec<Patch> = per_piece.into_iter().flatten().collect();
-        let boxes: Vec<(DVec3, DVec3)> = patches.par_iter().map(|p| p.bounds(model)).collect();
+        let boxes: Vec<(DVec3, DVec3)> = patches
+            .par_iter()
+            .map(|p| {
+                let (a, b) = p.bounds(model);
+                (a - DVec3::splat(margin), b + DVec3::splat(margin))
+            })
+            .collect();
         let centres: Vec<DVec3> = boxes.iter().map(|(a, b)| 0.5 * (*a + *b)).collect();
         let codes = morton_codes(&centres);
         let mut order: Vec<(u64, u32)> = codes
@@ -740,6 +804,7 @@ impl TileFrame {
 
 /// The search of one tile's vectors in one model's hierarchy.
 struct TileSearch<'a> {
+    margin: f64,
     model: &'a SweepModel,
     bvh: &'a PatchBvh,
     mi: u8,
@@ -771,6 +836,7 @@ impl<'a> TileSearch<'a> {
         vectors: &'a [Vector],
         frame: &'a TileFrame,
         states: &[State],
+        margin: f64,
     ) -> TileSearch<'a> {
         let seg: Vec<(DVec3, DVec3)> = (0..vectors.len())
             .map(|i| {
@@ -780,6 +846,7 @@ impl<'a> TileSearch<'a> {
             .collect();
         let lanes = Lanes::new(&seg);
         let mut t = TileSearch {
+            margin,
             model,
             bvh,
             mi,
@@ -849,7 +916,7 @@ impl<'a> TileSearch<'a> {
         }
         for patch in &self.bvh.patches[node.first as usize..(node.first + node.count) as usize] {
             self.cells.clear();
-            patch.cells(self.model, self.frame, &mut self.cells);
+            patch.cells(self.model, self.frame, self.margin, &mut self.cells);
             let (mut pl, mut ph) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
             for c in &self.cells {
                 pl = pl.min(c.lo);
@@ -889,7 +956,7 @@ impl<'a> TileSearch<'a> {
                     let st = &mut states[i];
                     for p in c.tris.iter().flatten() {
                         if let Some((s, b1, b2, facing)) =
-                            p.entry(v.o, v.n, self.dls[i], v.lo, st.hi)
+                            p.entry(v.o, v.n, self.dls[i], v.lo, st.hi, self.margin)
                         {
                             found = true;
                             let cr = Crossing {
@@ -1008,6 +1075,7 @@ fn search_all(
     vectors: &[Vector],
     order: &[u32],
     delta: f64,
+    margin: f64,
     cap: f64,
 ) -> Vec<(u32, Option<Found>)> {
     let tl = tiles(order, vectors);
@@ -1033,7 +1101,7 @@ fn search_all(
                 let mut states: Vec<State> = vs.iter().map(|v| State::new(v, delta)).collect();
                 let frame = TileFrame::new(&vs);
                 for (mi, (m, b)) in models.iter().enumerate() {
-                    TileSearch::new(m, b, mi as u8, &vs, &frame, &states)
+                    TileSearch::new(m, b, mi as u8, &vs, &frame, &states, margin)
                         .run(&mut states, &mut hot[mi]);
                 }
                 // Complete when the lowest crossing's window lies inside the searched range.
@@ -1058,12 +1126,19 @@ const TILES_PER_RUN: usize = 16;
 const NEAR_MM: f64 = 0.3;
 
 /// For every vector, the crossings with the models' swept surfaces (see the module docs),
-/// `delta` being the window above the lowest crossing. Vectors are searched first with their
+/// `delta` being the window above the lowest crossing and `margin` (mm) how far outside a
+/// triangle a line still counts as crossing it (0: the paper's triangles exactly; the
+/// [`PatchBvh`]s must be built with the same margin). Vectors are searched first with their
 /// range capped at `NEAR_MM + delta` above the vertex; the answer is complete when the
 /// lowest crossing found lies within `NEAR_MM` (its window then lies inside the cap); the
 /// other vectors are searched again over their whole range. Parallel over tiles; the result
 /// does not depend on the number of threads.
-pub fn locate(models: &[(&SweepModel, &PatchBvh)], vectors: &[Vector], delta: f64) -> Vec<Found> {
+pub fn locate(
+    models: &[(&SweepModel, &PatchBvh)],
+    vectors: &[Vector],
+    delta: f64,
+    margin: f64,
+) -> Vec<Found> {
     let codes = morton_codes(&vectors.iter().map(|v| v.o).collect::<Vec<_>>());
     let mut keyed: Vec<(u64, u32)> = codes
         .into_iter()
@@ -1074,13 +1149,13 @@ pub fn locate(models: &[(&SweepModel, &PatchBvh)], vectors: &[Vector], delta: f6
     let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
     let mut out = vec![Found::default(); vectors.len()];
     let mut again = Vec::new();
-    for (i, f) in search_all(models, vectors, &order, delta, NEAR_MM + delta) {
+    for (i, f) in search_all(models, vectors, &order, delta, margin, NEAR_MM + delta) {
         match f {
             Some(f) => out[i as usize] = f,
             None => again.push(i),
         }
     }
-    for (i, f) in search_all(models, vectors, &again, delta, f64::INFINITY) {
+    for (i, f) in search_all(models, vectors, &again, delta, margin, f64::INFINITY) {
         out[i as usize] = f.unwrap_or_default();
     }
     out
@@ -1093,6 +1168,7 @@ pub fn locate_reference(
     models: &[&SweepModel],
     vectors: &[Vector],
     delta: f64,
+    margin: f64,
     caps: bool,
 ) -> Vec<Found> {
     let mut tris = Vec::new();
@@ -1108,7 +1184,31 @@ pub fn locate_reference(
             });
         }
     }
-    let bvh = TriangleBvh::new(&tris);
+    // Boxes that hold each triangle's margin band: the triangle scaled about its incentre by
+    // (inradius + margin) / inradius is its (mitred) offset by `margin`, which holds the band.
+    let grown: Vec<Triangle> = tris
+        .iter()
+        .map(|t| {
+            if margin == 0.0 {
+                return *t;
+            }
+            let [a, b, c] = t.v;
+            let (la, lb, lc) = ((b - c).length(), (c - a).length(), (a - b).length());
+            let per = la + lb + lc;
+            let area2 = (b - a).cross(c - a).length();
+            if !(per > 0.0 && area2 > 0.0) {
+                return *t;
+            }
+            let inc = (la * a + lb * b + lc * c) / per;
+            let k = (area2 / per + margin) / (area2 / per);
+            Triangle::new(
+                inc + k * (a - inc),
+                inc + k * (b - inc),
+                inc + k * (c - inc),
+            )
+        })
+        .collect();
+    let bvh = TriangleBvh::new(&grown);
     vectors
         .par_iter()
         .map(|v| {
@@ -1120,7 +1220,7 @@ pub fn locate_reference(
                 .filter_map(|ti| {
                     let (mi, k) = ids[ti as usize];
                     let (s, b1, b2, facing) =
-                        entry_crossing(&tris[ti as usize], v.o, v.n, v.lo, v.hi)?;
+                        entry_crossing(&tris[ti as usize], v.o, v.n, v.lo, v.hi, margin)?;
                     Some(Crossing {
                         s,
                         model: mi,

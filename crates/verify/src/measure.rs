@@ -6,12 +6,15 @@
 //! The imprint surface joins exact points by chords, so it lies inside the swept volume by
 //! up to the chord sag (`r(1 − cos π/Q)` across a ball's groove, 9.25 µm at Q = 40; more for
 //! a bull's long chords along its rim). A vector meets it that much (divided by the cosine
-//! of its incidence) beyond the true surface. Refinement solves for the true entry near each
-//! crossing. Where two sheets cross (the crest between passes) the lowest triangle may not
-//! belong to the lowest true sheet, so every crossing `c` with
-//! `s_c ≤ s_min + δ_c` is refined, `δ_c = 2·sag_c / max(|facing_c|, 0.2)` with `sag_c`
-//! estimated from the triangle's edges and the turn of the tool normal along them (capped
-//! at the search window of [`window`]); the lowest refined entry wins.
+//! of its incidence) beyond the true surface, and near a sheet's curved edge it can enter
+//! the true sheet and miss the chords: strip triangles are located with a margin of twice
+//! the sag ([`edge_margin`]). Refinement solves for the true entry near each crossing. Where
+//! two sheets cross (the crest between passes) the lowest triangle may not belong to the
+//! lowest true sheet, so every crossing `c` with `s_c ≤ s_min + δ_c` is a candidate,
+//! `δ_c = 4·sag / max(|facing_c|, 0.2)` with `sag` the tool's chord sag (the largest
+//! window, [`window`], for a step ending at a pose that joins two moves, where the true
+//! surface holds the tool at that pose); candidates are refined lowest first, skipping those
+//! whose window cannot reach below the best entry found, and the lowest entry wins.
 //!
 //! # What a refined value means
 //! Every refined entry is a point where the vector enters the cutter at some pose of the
@@ -137,28 +140,18 @@ fn tool_sag(model: &SweepModel) -> f64 {
         .max(r * (1.0 - (std::f64::consts::FRAC_PI_4 / rings).cos()))
 }
 
+/// How far outside a strip triangle (mm) a line still locates it on the exact surface:
+/// twice the tool's chord sag.
+pub fn edge_margin(models: &[&SweepModel]) -> f64 {
+    models.iter().map(|m| 2.0 * tool_sag(m)).fold(0.0, f64::max)
+}
+
 /// The search window above the lowest crossing (mm): the largest `δ_c` allowed.
 pub fn window(models: &[&SweepModel]) -> f64 {
     models
         .iter()
         .map(|m| SAFETY * tool_sag(m) / MIN_FACING)
         .fold(1e-6, f64::max)
-}
-
-/// Unit normal of the tool at imprint point `m` of pose frame `f` (for a flat end mill, the
-/// rim's radial direction, which turns the same way along the rim).
-fn point_normal(model: &SweepModel, f: u32, m: DVec3) -> DVec3 {
-    let fr = &model.frames[f as usize];
-    let c = model.cutter();
-    let (a, r) = (c.major_radius(), c.corner_radius());
-    let y = m - fr.centre;
-    let h = y - y.dot(fr.axis) * fr.axis;
-    let uh = h.try_normalize().unwrap_or(fr.e1);
-    if r > 0.0 {
-        ((y - a * uh) / r).try_normalize().unwrap_or(-fr.axis)
-    } else {
-        uh
-    }
 }
 
 /// The strip slot's corners as (pose 0 or 1, point index), in the order of the unoriented
@@ -184,30 +177,6 @@ fn oriented_corners(model: &SweepModel, piece: usize, slot: usize) -> Option<[(u
         c.swap(1, 2);
     }
     Some(c)
-}
-
-/// Sag estimate (mm) of the triangle of a crossing: per edge, its length times the turn of
-/// the tool normal along it over 8 (exact for a circular arc to second order; the turn is
-/// taken as the chord `|n_i − n_j|` of the unit normals, times 1.1 to cover the arc).
-fn sag_of(model: &SweepModel, piece: usize, slot: usize) -> f64 {
-    match model.pieces[piece] {
-        Piece::Cap { .. } | Piece::Gap { .. } => tool_sag(model),
-        Piece::Strip { frame, .. } => {
-            let c = slot_corners(slot);
-            let pn = c.map(|(p, j)| {
-                let f = frame + p as u32;
-                let m = model.curve(f)[j];
-                (m, point_normal(model, f, m))
-            });
-            let mut sag: f64 = 0.0;
-            for (i, k) in [(0, 1), (1, 2), (2, 0)] {
-                let (pi, ni) = pn[i];
-                let (pk, nk) = pn[k];
-                sag = sag.max(pi.distance(pk) * ni.distance(nk));
-            }
-            sag * 1.1 / 8.0
-        }
-    }
 }
 
 /// The refinement context: the toolpath's moves, the cutter's puck, the line bounds.
@@ -636,14 +605,23 @@ fn measure_vectors(
     let exact = surface == SurfaceModel::Exact;
     let vectors = vectors.to_vec();
     let delta = window(models);
-    // Exact: caps are tested exactly below, the triangles locate strips only.
+    // Exact: caps are tested exactly below, the triangles locate strips only, and a line
+    // passing just outside a triangle counts: the true sheet bulges past its chords by up to
+    // the sag, so near a sheet's curved edge a line can enter it and miss its triangles.
+    let margin = if exact { edge_margin(models) } else { 0.0 };
+    let sags: Vec<f64> = models.iter().map(|m| tool_sag(m)).collect();
     let found = match locator {
         Locator::Fast => {
-            let bvhs: Vec<PatchBvh> = models.iter().map(|m| PatchBvh::new(m, !exact)).collect();
+            let bvhs: Vec<PatchBvh> = models
+                .iter()
+                .map(|m| PatchBvh::new(m, !exact, margin))
+                .collect();
             let pairs: Vec<(&SweepModel, &PatchBvh)> = models.iter().copied().zip(&bvhs).collect();
-            locate(&pairs, &vectors, delta)
+            locate(&pairs, &vectors, delta, margin)
         }
-        Locator::Reference => crate::locate::locate_reference(models, &vectors, delta, !exact),
+        Locator::Reference => {
+            crate::locate::locate_reference(models, &vectors, delta, margin, !exact)
+        }
     };
     let puck = models
         .first()
@@ -710,16 +688,32 @@ fn measure_vectors(
             };
             let mut done: Vec<(u8, u64)> = Vec::new();
             if let Some(low) = low {
+                // Each crossing's true surface lies at most its window below it. In order of
+                // the crossings (lowest first): none beyond the best entry found plus the
+                // largest window can win; one whose own window does not reach below the best
+                // entry, or below the lowest crossing, cannot either.
                 for c in &f.crossings {
+                    if best.is_some_and(|b| c.s - delta > b.0.s) {
+                        break;
+                    }
                     let id = rf.identity(c);
                     if done.contains(&id) {
                         continue;
                     }
-                    let (piece, slot) = unkey(c.key);
+                    let (piece, _) = unkey(c.key);
                     let m = models[c.model as usize];
-                    let d = (SAFETY * sag_of(m, piece, slot) / c.facing.abs().max(MIN_FACING))
-                        .min(delta);
-                    if c.s > low.s + d {
+                    // At a pose joining two moves the true surface holds the tool there (the
+                    // fan between the two moves' imprint curves), which the strips can miss by
+                    // more than a chord's sag: the largest window.
+                    let joint = matches!(m.pieces[piece], Piece::Strip { step, .. }
+                        if step.u_from.min(step.u_to) == 0.0 || step.u_from.max(step.u_to) == 1.0);
+                    let d = if joint {
+                        delta
+                    } else {
+                        (SAFETY * sags[c.model as usize] / c.facing.abs().max(MIN_FACING))
+                            .min(delta)
+                    };
+                    if c.s > low.s + d || best.is_some_and(|b| c.s - d > b.0.s) {
                         continue;
                     }
                     done.push(id);

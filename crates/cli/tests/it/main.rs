@@ -5,3 +5,4 @@ mod plan;
 mod plan_checks;
 mod support;
 mod verify;
+mod verify_zmap;
