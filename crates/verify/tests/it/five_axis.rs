@@ -124,10 +124,8 @@ fn measure(surface: TestSurface, v: f64) -> Vec<Row> {
 ///   and at second order with Q (the chord error of `Q/2 + 1` points per imprint curve):
 ///   Q = 40 gives 30–41 µm max, Q = 80 9–14 µm;
 /// - the exact surface (crossings refined onto the continuous imprint surface) agrees within
-///   the 2 µm from Q = 20 on, and in fact to the envelope's own accuracy (< 1 nm,
-///   the test asserts 1 nm); at Q = 10 the coarse surface can locate a crossing a whole move
-///   away from the true contact, which the local refinement does not reach, so only the
-///   improvement over the linear surface is asserted there.
+///   the 2 µm at every Q, in fact to the envelope's own accuracy (< 1 nm; measured
+///   ~1e-6 µm; the test asserts 1 nm).
 ///
 /// Vertices and centroids against the local envelope are printed, not asserted: their
 /// maxima come from the tool's sides near the demarcations, where the rotating tool's
