@@ -1076,7 +1076,7 @@ fn search_all(
     order: &[u32],
     delta: f64,
     margin: f64,
-    cap: f64,
+    (floor, cap): (f64, f64),
 ) -> Vec<(u32, Option<Found>)> {
     let tl = tiles(order, vectors);
     // Runs of consecutive tiles are searched in sequence, each tile starting from the leaves
@@ -1093,6 +1093,7 @@ fn search_all(
                     .map(|&i| {
                         let v = vectors[i as usize];
                         Vector {
+                            lo: v.lo.max(floor),
                             hi: v.hi.min(cap),
                             ..v
                         }
@@ -1131,8 +1132,9 @@ const NEAR_MM: f64 = 0.3;
 /// [`PatchBvh`]s must be built with the same margin). Vectors are searched first with their
 /// range capped at `NEAR_MM + delta` above the vertex; the answer is complete when the
 /// lowest crossing found lies within `NEAR_MM` (its window then lies inside the cap); the
-/// other vectors are searched again over their whole range. Parallel over tiles; the result
-/// does not depend on the number of threads.
+/// other vectors have no crossing below `NEAR_MM` and are searched again from there to the
+/// end of their range. Parallel over tiles; the result does not depend on the number of
+/// threads.
 pub fn locate(
     models: &[(&SweepModel, &PatchBvh)],
     vectors: &[Vector],
@@ -1149,13 +1151,30 @@ pub fn locate(
     let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
     let mut out = vec![Found::default(); vectors.len()];
     let mut again = Vec::new();
-    for (i, f) in search_all(models, vectors, &order, delta, margin, NEAR_MM + delta) {
+    let first = search_all(
+        models,
+        vectors,
+        &order,
+        delta,
+        margin,
+        (f64::NEG_INFINITY, NEAR_MM + delta),
+    );
+    for (i, f) in first {
         match f {
             Some(f) => out[i as usize] = f,
             None => again.push(i),
         }
     }
-    for (i, f) in search_all(models, vectors, &again, delta, margin, f64::INFINITY) {
+    // The first search held every crossing up to NEAR_MM: there is none, so the second
+    // starts there.
+    for (i, f) in search_all(
+        models,
+        vectors,
+        &again,
+        delta,
+        margin,
+        (NEAR_MM, f64::INFINITY),
+    ) {
         out[i as usize] = f.unwrap_or_default();
     }
     out

@@ -126,8 +126,8 @@ pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source,
     g.depth_at(p)
 }
 
-const SAFETY: f64 = 4.0;
-const MIN_FACING: f64 = 0.2;
+const SAFETY: f64 = 2.0;
+const MIN_FACING: f64 = 0.5;
 
 /// Largest chord sag (mm) of the imprint surface's caps, also a scale for its strips: the
 /// rim's chord over one sector and the corner's over one ring.
@@ -609,7 +609,6 @@ fn measure_vectors(
     // passing just outside a triangle counts: the true sheet bulges past its chords by up to
     // the sag, so near a sheet's curved edge a line can enter it and miss its triangles.
     let margin = if exact { edge_margin(models) } else { 0.0 };
-    let sags: Vec<f64> = models.iter().map(|m| tool_sag(m)).collect();
     let found = match locator {
         Locator::Fast => {
             let bvhs: Vec<PatchBvh> = models
@@ -702,17 +701,18 @@ fn measure_vectors(
                     }
                     let (piece, _) = unkey(c.key);
                     let m = models[c.model as usize];
-                    // At a pose joining two moves the true surface holds the tool there (the
-                    // fan between the two moves' imprint curves), which the strips can miss by
-                    // more than a chord's sag: the largest window.
-                    let joint = matches!(m.pieces[piece], Piece::Strip { step, .. }
-                        if step.u_from.min(step.u_to) == 0.0 || step.u_from.max(step.u_to) == 1.0);
-                    let d = if joint {
-                        delta
-                    } else {
-                        (SAFETY * sags[c.model as usize] / c.facing.abs().max(MIN_FACING))
-                            .min(delta)
+                    // Where the path turns at one of the step's poses the true surface holds
+                    // the tool there (the fan between the imprint curves of the two
+                    // directions), which the strips can miss by up to R(1 − cos(turn/2)).
+                    let fan = match m.pieces[piece] {
+                        Piece::Strip { frame, .. } => {
+                            let t = m.turn[frame as usize].max(m.turn[frame as usize + 1]);
+                            m.cutter().radius() * (1.0 - (0.5 * t).cos())
+                        }
+                        _ => 0.0,
                     };
+                    let sag = f64::from(m.sag[piece]);
+                    let d = ((SAFETY * sag + fan) / c.facing.abs().max(MIN_FACING)).min(delta);
                     if c.s > low.s + d || best.is_some_and(|b| c.s - d > b.0.s) {
                         continue;
                     }

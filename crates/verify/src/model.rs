@@ -92,6 +92,13 @@ pub struct SweepModel {
     pub pieces: Vec<Piece>,
     /// Imprinted points (poses × points per curve), for statistics.
     pub imprint_points: usize,
+    /// Per piece: an estimate (mm) of how far the true surface lies outside the strip's
+    /// triangles (each edge's length times the turn of the tool normal along it over 8,
+    /// the largest in the strip); 0 for caps and gaps.
+    pub sag: Vec<f32>,
+    /// Per frame: the angle (rad) the torus centre's direction of motion turns at that pose
+    /// (0 at a segment's first and last pose, where caps stand).
+    pub turn: Vec<f64>,
     /// `(cos, sin)` of the cap sector angles `2π·s/Q`, `s = 0 ..= Q`.
     sector_cs: Vec<(f64, f64)>,
     /// `(sin, cos)` of the cap ring profile angles `π/2 · g/rings`, `g = 0 ..= rings`.
@@ -272,6 +279,7 @@ impl SweepModel {
         let cos_limit = cfg.sharp_turn_deg.to_radians().cos();
         let mut pieces = Vec::new();
         let mut frames = Vec::with_capacity(total);
+        let mut turn = Vec::with_capacity(total);
         for (seg, info) in segments.into_iter().zip(&infos) {
             let base = frames.len() as u32;
             let n = seg.frames.len();
@@ -313,8 +321,47 @@ impl SweepModel {
                 frame: base + n as u32 - 1,
                 mv: seg.steps[n - 2].mv,
             });
+            turn.push(0.0);
+            for w in seg.frames.windows(3) {
+                let (a, b) = (w[1].centre - w[0].centre, w[2].centre - w[1].centre);
+                turn.push(a.angle_between(b).min(std::f64::consts::PI));
+            }
+            if n > 1 {
+                turn.push(0.0);
+            }
             frames.extend(seg.frames);
         }
+        let sag: Vec<f32> = pieces
+            .par_iter()
+            .map(|p| match *p {
+                Piece::Strip { frame, .. } => {
+                    let normals = |f: u32| -> Vec<(DVec3, DVec3)> {
+                        let fr = &frames[f as usize];
+                        curves[f as usize * l..(f as usize + 1) * l]
+                            .iter()
+                            .map(|&m| (m, point_normal(cutter, fr, m)))
+                            .collect()
+                    };
+                    let (c0, c1) = (normals(frame), normals(frame + 1));
+                    let edge = |(p, n): (DVec3, DVec3), (q, m): (DVec3, DVec3)| {
+                        p.distance(q) * n.distance(m)
+                    };
+                    let mut worst: f64 = 0.0;
+                    for j in 0..l {
+                        worst = worst.max(edge(c0[j], c1[j]));
+                        if j + 1 < l {
+                            worst = worst
+                                .max(edge(c0[j], c0[j + 1]))
+                                .max(edge(c1[j], c1[j + 1]))
+                                .max(edge(c0[j], c1[j + 1]));
+                        }
+                    }
+                    // Chord of the normals for the angle (× 1.1 covers the arc), over 8.
+                    (worst * 1.1 / 8.0) as f32
+                }
+                _ => 0.0,
+            })
+            .collect();
         let rings = (q / 4).max(2);
         let step = 2.0 * std::f64::consts::PI / q as f64;
         let sector_cs = (0..=q)
@@ -338,6 +385,8 @@ impl SweepModel {
             ring_sc,
             per_curve: l,
             imprint_points: total * l,
+            sag,
+            turn,
             frames,
             curves,
             pieces,
@@ -500,6 +549,20 @@ impl SweepModel {
             }
             Piece::Gap { .. } => {}
         }
+    }
+}
+
+/// Unit normal of the tool at imprint point `m` of pose frame `f` (for a flat end mill, the
+/// rim's radial direction, which turns the same way along the rim).
+fn point_normal(cutter: &Cutter, f: &PoseFrame, m: DVec3) -> DVec3 {
+    let (a, r) = (cutter.major_radius(), cutter.corner_radius());
+    let y = m - f.centre;
+    let h = y - y.dot(f.axis) * f.axis;
+    let uh = h.try_normalize().unwrap_or(f.e1);
+    if r > 0.0 {
+        ((y - a * uh) / r).try_normalize().unwrap_or(-f.axis)
+    } else {
+        uh
     }
 }
 
