@@ -126,7 +126,7 @@ pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source,
     g.depth_at(p)
 }
 
-const SAFETY: f64 = 2.0;
+const SAFETY: f64 = 4.0;
 const MIN_FACING: f64 = 0.5;
 
 /// Largest chord sag (mm) of the imprint surface's caps, also a scale for its strips: the
