@@ -233,7 +233,7 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     );
     let mut table = String::from(
         "| part | tris | cutter | moves | plan s | verify s | sweep s | refine s | measure s | \
-         other s | refined vertices | swept triangles (fwd) | max gouge mm | max excess mm | \
+         other s | refined vertices | swept triangle slots (fwd) | max gouge mm | max excess mm | \
          verify/plan (target <= 1) |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | \
          --- |\n",
@@ -282,7 +282,7 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
                                 v.report
                                     .settings
                                     .as_ref()
-                                    .and_then(|st| st.extra.get("swept_triangles").copied())
+                                    .and_then(|st| st.extra.get("swept_triangle_slots").copied())
                                     .unwrap_or(0.0),
                                 v.report.max_gouge_mm,
                                 v.report.max_excess_mm,

@@ -26,6 +26,10 @@ pub struct VerifyOpts {
     /// Do not sweep the path in reverse to look for back gouges.
     #[arg(long)]
     pub no_back_gouge: bool,
+    /// Swept surface measured against: `exact` refines every crossing of the imprint
+    /// surface onto the exact swept volume; `linear` is the paper's piecewise-linear surface.
+    #[arg(long, value_enum, default_value_t = Surface::Exact)]
+    pub surface: Surface,
     /// Write the swept surface (.obj, .stl or .ply by extension).
     #[arg(long)]
     pub swept: Option<PathBuf>,
@@ -36,6 +40,15 @@ pub struct VerifyOpts {
     /// Write a top-view heat map of the deviation with a colour scale (.png).
     #[arg(long)]
     pub heatmap: Option<PathBuf>,
+}
+
+/// The swept surface a verification measures against.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Surface {
+    /// Crossings refined onto the exact swept volume.
+    Exact,
+    /// The paper's triangles between imprint points.
+    Linear,
 }
 
 /// Arguments of `cam verify`.
@@ -120,6 +133,10 @@ pub fn run_verification(
     cfg.sweep.max_step_mm = o.max_step;
     cfg.resolution_mm = o.resolution;
     cfg.back_gouge = !o.no_back_gouge;
+    cfg.surface = match o.surface {
+        Surface::Exact => cam_verify::measure::SurfaceModel::Exact,
+        Surface::Linear => cam_verify::measure::SurfaceModel::Linear,
+    };
     if !(tolerance.is_finite() && tolerance > 0.0) {
         bail!("--tolerance must be a positive number of mm, got {tolerance}");
     }

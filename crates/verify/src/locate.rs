@@ -85,24 +85,16 @@ pub struct Found {
     pub overflow: bool,
 }
 
-/// Per-vector state during a search.
-#[derive(Debug, Clone, Copy)]
+/// Per-vector state during a search. The crossing list is a `Vec` of capacity
+/// [`MAX_CANDIDATES`], reused from tile to tile ([`State::reset`]).
+#[derive(Debug, Clone)]
 struct State {
     best: f64,
     hi: f64,
     delta: f64,
-    len: u8,
     overflow: bool,
-    cands: [Crossing; MAX_CANDIDATES],
+    cands: Vec<Crossing>,
 }
-
-const NO_CROSSING: Crossing = Crossing {
-    s: 0.0,
-    model: 0,
-    key: 0,
-    facing: 0.0,
-    bary: (0.0, 0.0),
-};
 
 impl State {
     fn new(v: &Vector, delta: f64) -> State {
@@ -110,21 +102,18 @@ impl State {
             best: f64::INFINITY,
             hi: v.hi,
             delta,
-            len: 0,
             overflow: false,
-            cands: [NO_CROSSING; MAX_CANDIDATES],
+            cands: Vec::with_capacity(MAX_CANDIDATES),
         }
     }
 
-    fn retain_below(&mut self, hi: f64) {
-        let mut n = 0;
-        for i in 0..self.len as usize {
-            if self.cands[i].s <= hi {
-                self.cands[n] = self.cands[i];
-                n += 1;
-            }
-        }
-        self.len = n as u8;
+    /// Empties the state for vector `v`, keeping the list's allocation.
+    fn reset(&mut self, v: &Vector, delta: f64) {
+        self.best = f64::INFINITY;
+        self.hi = v.hi;
+        self.delta = delta;
+        self.overflow = false;
+        self.cands.clear();
     }
 
     /// Records an accepted crossing; returns true when the live range shrank.
@@ -137,27 +126,28 @@ impl State {
                 self.hi = hi;
                 shrank = true;
             }
-            self.retain_below(self.hi);
+            let hi = self.hi;
+            self.cands.retain(|x| x.s <= hi);
         }
         if c.s > self.hi {
             return shrank;
         }
         // One crossing per piece: its lowest.
         let piece = c.key >> 32;
-        if let Some(i) = self.cands[..self.len as usize]
-            .iter()
-            .position(|x| x.model == c.model && x.key >> 32 == piece)
+        if let Some(x) = self
+            .cands
+            .iter_mut()
+            .find(|x| x.model == c.model && x.key >> 32 == piece)
         {
-            if c.before(&self.cands[i]) {
-                self.cands[i] = c;
+            if c.before(x) {
+                *x = c;
             }
             return shrank;
         }
-        let n = self.len as usize;
-        if n == MAX_CANDIDATES {
+        if self.cands.len() == MAX_CANDIDATES {
             // Keep the lowest: drop the highest of the list and the new one.
             let mut wi = 0;
-            for i in 1..n {
+            for i in 1..self.cands.len() {
                 if self.cands[wi].before(&self.cands[i]) {
                     wi = i;
                 }
@@ -167,15 +157,16 @@ impl State {
                 self.cands[wi] = c;
             }
         } else {
-            self.cands[n] = c;
-            self.len += 1;
+            self.cands.push(c);
         }
         shrank
     }
 
-    fn finish(mut self) -> Found {
-        self.retain_below(self.best + self.delta);
-        let mut crossings = self.cands[..self.len as usize].to_vec();
+    /// The kept crossings, lowest first.
+    fn finish(&self) -> Found {
+        let hi = self.best + self.delta;
+        let mut crossings: Vec<Crossing> =
+            self.cands.iter().filter(|x| x.s <= hi).copied().collect();
         crossings.sort_by(|a, b| {
             a.s.total_cmp(&b.s)
                 .then((a.model, a.key).cmp(&(b.model, b.key)))
@@ -1086,6 +1077,7 @@ fn search_all(
         .map(|run| {
             let mut hot: Vec<Vec<u32>> = vec![Vec::new(); models.len()];
             let mut out = Vec::new();
+            let mut states: Vec<State> = Vec::new();
             for range in run {
                 let idx = &order[range.clone()];
                 let vs: Vec<Vector> = idx
@@ -1099,14 +1091,20 @@ fn search_all(
                         }
                     })
                     .collect();
-                let mut states: Vec<State> = vs.iter().map(|v| State::new(v, delta)).collect();
+                states.truncate(vs.len());
+                for (st, v) in states.iter_mut().zip(&vs) {
+                    st.reset(v, delta);
+                }
+                for v in &vs[states.len()..] {
+                    states.push(State::new(v, delta));
+                }
                 let frame = TileFrame::new(&vs);
                 for (mi, (m, b)) in models.iter().enumerate() {
                     TileSearch::new(m, b, mi as u8, &vs, &frame, &states, margin)
                         .run(&mut states, &mut hot[mi]);
                 }
                 // Complete when the lowest crossing's window lies inside the searched range.
-                for ((&i, st), v) in idx.iter().zip(states).zip(&vs) {
+                for ((&i, st), v) in idx.iter().zip(&states).zip(&vs) {
                     let complete = st.best <= cap - delta || v.hi >= vectors[i as usize].hi;
                     out.push((i, complete.then(|| st.finish())));
                 }

@@ -232,11 +232,12 @@ pub fn verify(
     extra.insert("inserts".to_string(), cfg.sweep.inserts as f64);
     extra.insert("max_step_mm".to_string(), cfg.sweep.max_step_mm);
     extra.insert(
-        "swept_triangles".to_string(),
+        "swept_triangle_slots".to_string(),
         (0..swept.pieces.len())
             .map(|i| swept.slots(i))
             .sum::<usize>() as f64,
     );
+    extra.insert("imprint_points".to_string(), swept.imprint_points as f64);
     extra.insert(
         "exact_surface".to_string(),
         if cfg.surface == SurfaceModel::Exact {
