@@ -306,8 +306,9 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     );
     println!(
         "Stage timings are from the best verify run (Verification::timings): sweep = forward \
-         and reverse sweeps, refine = design-surface refinement, measure = BVHs of the swept \
-         surfaces and normal-vector deviations; other = the rest (report)."
+         and back-gouge sweep models (imprint curves), refine = design-surface refinement, \
+         measure = locating the normal vectors' crossings and refining them onto the exact \
+         swept volume; other = the rest (report)."
     );
     println!(
         "\nMeasure stage of the best run: strips and caps of the forward sweep (the back-gouge \

@@ -1,5 +1,6 @@
 //! The surface swept by a cutter along a 3- or 5-axis toolpath, from imprint curves
-//! (Roth, Bedi, Ismail, Mann 2000, §3.3), as a triangle soup.
+//! (Roth, Bedi, Ismail, Mann 2000, §3.3), as a triangle soup generated from the compact
+//! [`crate::model::SweepModel`].
 //!
 //! # What sweeps
 //! Only feed moves ([`MoveKind::Cut`], [`MoveKind::Plunge`], [`MoveKind::Retract`]) sweep; a
