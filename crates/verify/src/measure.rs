@@ -713,7 +713,9 @@ fn measure_vectors(
                     };
                     let sag = f64::from(m.sag[piece]);
                     let d = ((SAFETY * sag + fan) / c.facing.abs().max(MIN_FACING)).min(delta);
-                    if c.s > low.s + d || best.is_some_and(|b| c.s - d > b.0.s) {
+                    // A candidate whose surface cannot lie below the best entry (ties
+                    // included: they would not change the answer) is not refined.
+                    if c.s > low.s + d || best.is_some_and(|b| c.s - d >= b.0.s) {
                         continue;
                     }
                     done.push(id);

@@ -335,11 +335,12 @@ impl SweepModel {
             .par_iter()
             .map(|p| match *p {
                 Piece::Strip { frame, .. } => {
+                    let motion = frames[frame as usize + 1].centre - frames[frame as usize].centre;
                     let normals = |f: u32| -> Vec<(DVec3, DVec3)> {
                         let fr = &frames[f as usize];
                         curves[f as usize * l..(f as usize + 1) * l]
                             .iter()
-                            .map(|&m| (m, point_normal(cutter, fr, m)))
+                            .map(|&m| (m, surface_normal(cutter, fr, m, motion)))
                             .collect()
                     };
                     let (c0, c1) = (normals(frame), normals(frame + 1));
@@ -552,9 +553,11 @@ impl SweepModel {
     }
 }
 
-/// Unit normal of the tool at imprint point `m` of pose frame `f` (for a flat end mill, the
-/// rim's radial direction, which turns the same way along the rim).
-fn point_normal(cutter: &Cutter, f: &PoseFrame, m: DVec3) -> DVec3 {
+/// Unit normal of the swept surface at imprint point `m` of pose frame `f` moving along
+/// `motion`: the tool's normal there (the envelope is tangent to the tool at its imprint
+/// points); for a flat end mill, whose imprint points lie on the rim (an edge), the normal
+/// of the surface the rim sweeps, `rim tangent × motion`, facing away from the tool.
+fn surface_normal(cutter: &Cutter, f: &PoseFrame, m: DVec3, motion: DVec3) -> DVec3 {
     let (a, r) = (cutter.major_radius(), cutter.corner_radius());
     let y = m - f.centre;
     let h = y - y.dot(f.axis) * f.axis;
@@ -562,7 +565,13 @@ fn point_normal(cutter: &Cutter, f: &PoseFrame, m: DVec3) -> DVec3 {
     if r > 0.0 {
         ((y - a * uh) / r).try_normalize().unwrap_or(-f.axis)
     } else {
-        uh
+        let n = f
+            .axis
+            .cross(uh)
+            .cross(motion)
+            .try_normalize()
+            .unwrap_or(-f.axis);
+        if n.dot(f.axis) > 0.0 { -n } else { n }
     }
 }
 
