@@ -1,6 +1,7 @@
 //! cam-verify integration tests: one binary, one module per topic.
 
 mod deviation;
+mod exact;
 mod five_axis;
 mod imprint;
 mod measure;
