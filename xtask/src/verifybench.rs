@@ -127,70 +127,40 @@ pub fn plan_poses(toolpath: &Toolpath) -> Vec<Pose> {
         .collect()
 }
 
-/// Where the measure stage's time goes, for one verification (one run each).
+/// What the measure stage worked on, for one verification.
 #[derive(Debug, Clone, Copy)]
 pub struct MeasureBreakdown {
-    /// Seconds for `TriangleBvh::new` over the forward swept surface.
-    pub bvh_s: f64,
-    /// Seconds for `measure_with_bvh` against the forward sweep (all refined vertices).
-    pub forward_s: f64,
-    /// Microseconds per vertex of that forward measurement.
+    /// Forward strips (one per step between imprint curves).
+    pub strips: usize,
+    /// Forward caps (tool at segment ends and sharp turns).
+    pub caps: usize,
+    /// Imprint points of the forward sweep.
+    pub imprint_points: usize,
+    /// Exact refinements (one per move, strip or cap tried per vector).
+    pub refinements: usize,
+    /// Vectors whose crossings could not be refined (linear value kept).
+    pub kept_linear: usize,
+    /// Microseconds of measure stage per refined-mesh vertex (2 threads).
     pub us_per_vertex: f64,
-    /// Mean number of swept triangles each vector crosses (every `SAMPLE_EVERY`-th vertex).
-    pub crossings_per_vector: f64,
-    /// Largest number of crossings of one sampled vector.
-    pub max_crossings: usize,
-    /// Forward swept triangles between imprint curves.
-    pub strip_triangles: usize,
-    /// Forward swept triangles on caps (tool surface at run ends and sharp turns).
-    pub cap_triangles: usize,
 }
 
-/// Vertex sampling stride for the crossing counts.
-pub const SAMPLE_EVERY: usize = 97;
-
-/// Re-times the forward half of the measure stage of `v` and counts vector crossings.
-pub fn measure_breakdown(
-    v: &cam_verify::Verification,
-    cfg: &VerifyConfig,
-) -> Result<MeasureBreakdown> {
-    use cam_verify::deviation::{TriangleBvh, measure_with_bvh};
-    use cam_verify::sweep::FacetKind;
-    let cap_triangles = v
+/// Counts of the measure stage of `v`.
+pub fn measure_breakdown(v: &cam_verify::Verification) -> MeasureBreakdown {
+    use cam_verify::model::Piece;
+    let caps = v
         .swept
-        .kind
+        .pieces
         .iter()
-        .filter(|k| **k == FacetKind::Cap)
+        .filter(|p| matches!(p, Piece::Cap { .. }))
         .count();
-    let t = Instant::now();
-    let bvh = TriangleBvh::new(&v.swept.triangles);
-    let bvh_s = t.elapsed().as_secs_f64();
-    let t = Instant::now();
-    let devs = measure_with_bvh(&v.refined, &bvh, &v.swept.source_move, &cfg.deviation)?;
-    let forward_s = t.elapsed().as_secs_f64();
-    let (mut sum, mut max, mut n) = (0usize, 0usize, 0usize);
-    for i in (0..v.refined.len()).step_by(SAMPLE_EVERY) {
-        let mut c = 0;
-        bvh.segment_hits(
-            v.refined.positions[i],
-            v.refined.normals[i],
-            -cfg.deviation.inside_mm,
-            cfg.deviation.outside_mm,
-            |_| c += 1,
-        );
-        sum += c;
-        max = max.max(c);
-        n += 1;
+    MeasureBreakdown {
+        strips: v.swept.pieces.len() - caps,
+        caps,
+        imprint_points: v.swept.imprint_points,
+        refinements: v.stats.refinements,
+        kept_linear: v.stats.kept_linear,
+        us_per_vertex: v.timings.measure_s * 1e6 / v.refined.len().max(1) as f64,
     }
-    Ok(MeasureBreakdown {
-        bvh_s,
-        forward_s,
-        us_per_vertex: forward_s * 1e6 / devs.len().max(1) as f64,
-        crossings_per_vector: sum as f64 / n.max(1) as f64,
-        max_crossings: max,
-        strip_triangles: v.swept.kind.len() - cap_triangles,
-        cap_triangles,
-    })
 }
 
 fn rate(points: usize, s: f64) -> String {
@@ -257,14 +227,13 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
 
     // (b) verify vs plan.
     let mut breakdown = String::from(
-        "| part | cutter | fwd BVH build s | fwd measure s | us per vertex (2 threads) | \
-         crossings per vector (mean, sampled) | max crossings | fwd strip triangles | fwd cap \
-         triangles |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n",
+        "| part | cutter | us per vertex (measure, 2 threads) | fwd strips | fwd caps | imprint \
+         points (fwd) | exact refinements | vectors kept linear |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- |\n",
     );
     let mut table = String::from(
         "| part | tris | cutter | moves | plan s | verify s | sweep s | refine s | measure s | \
-         other s | refined vertices | swept triangles (fwd) | max gouge mm | max excess mm | \
+         other s | refined vertices | swept triangle slots (fwd) | max gouge mm | max excess mm | \
          verify/plan (target <= 1) |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | \
          --- |\n",
@@ -288,17 +257,15 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
                             plan.toolpath.moves.len()
                         ),
                         Ok(v) => {
-                            let b = measure_breakdown(&v, &vc)?;
+                            let b = measure_breakdown(&v);
                             breakdown.push_str(&format!(
-                                "| {name} | {spec} | {:.3} | {:.3} | {:.1} | {:.1} | {} | {} | {} \
-                                 |\n",
-                                b.bvh_s,
-                                b.forward_s,
+                                "| {name} | {spec} | {:.2} | {} | {} | {} | {} | {} |\n",
                                 b.us_per_vertex,
-                                b.crossings_per_vector,
-                                b.max_crossings,
-                                b.strip_triangles,
-                                b.cap_triangles
+                                b.strips,
+                                b.caps,
+                                b.imprint_points,
+                                b.refinements,
+                                b.kept_linear
                             ));
                             let t = v.timings;
                             format!(
@@ -312,7 +279,11 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
                                 t.measure_s,
                                 verify_s - t.sweep_s - t.refine_s - t.measure_s,
                                 v.refined.len(),
-                                v.swept.triangles.len(),
+                                v.report
+                                    .settings
+                                    .as_ref()
+                                    .and_then(|st| st.extra.get("swept_triangle_slots").copied())
+                                    .unwrap_or(0.0),
                                 v.report.max_gouge_mm,
                                 v.report.max_excess_mm,
                                 verify_s / plan_s,
@@ -335,13 +306,14 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     );
     println!(
         "Stage timings are from the best verify run (Verification::timings): sweep = forward \
-         and reverse sweeps, refine = design-surface refinement, measure = BVHs of the swept \
-         surfaces and normal-vector deviations; other = the rest (report)."
+         and back-gouge sweep models (imprint curves), refine = design-surface refinement, \
+         measure = locating the normal vectors' crossings and refining them onto the exact \
+         swept volume; other = the rest (report)."
     );
     println!(
-        "\nMeasure stage, forward sweep only, re-run once outside verify (TriangleBvh::new, \
-         measure_with_bvh); crossings: swept triangles each normal vector (t from -L_in to \
-         L_out) crosses, every {SAMPLE_EVERY}th refined vertex:\n\n{breakdown}"
+        "\nMeasure stage of the best run: strips and caps of the forward sweep (the back-gouge \
+         sweep holds rotating moves only), exact refinements (one per move or cap tried per \
+         vector) and vectors whose crossings could not be refined:\n\n{breakdown}"
     );
     Ok(())
 }

@@ -26,6 +26,10 @@ pub struct VerifyOpts {
     /// Do not sweep the path in reverse to look for back gouges.
     #[arg(long)]
     pub no_back_gouge: bool,
+    /// Swept surface measured against: `exact` refines every crossing of the imprint
+    /// surface onto the exact swept volume; `linear` is the paper's piecewise-linear surface.
+    #[arg(long, value_enum, default_value_t = Surface::Exact)]
+    pub surface: Surface,
     /// Write the swept surface (.obj, .stl or .ply by extension).
     #[arg(long)]
     pub swept: Option<PathBuf>,
@@ -36,6 +40,15 @@ pub struct VerifyOpts {
     /// Write a top-view heat map of the deviation with a colour scale (.png).
     #[arg(long)]
     pub heatmap: Option<PathBuf>,
+}
+
+/// The swept surface a verification measures against.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Surface {
+    /// Crossings refined onto the exact swept volume.
+    Exact,
+    /// The paper's triangles between imprint points.
+    Linear,
 }
 
 /// Arguments of `cam verify`.
@@ -120,6 +133,10 @@ pub fn run_verification(
     cfg.sweep.max_step_mm = o.max_step;
     cfg.resolution_mm = o.resolution;
     cfg.back_gouge = !o.no_back_gouge;
+    cfg.surface = match o.surface {
+        Surface::Exact => cam_verify::measure::SurfaceModel::Exact,
+        Surface::Linear => cam_verify::measure::SurfaceModel::Linear,
+    };
     if !(tolerance.is_finite() && tolerance > 0.0) {
         bail!("--tolerance must be a positive number of mm, got {tolerance}");
     }
@@ -133,9 +150,9 @@ pub fn run_verification(
             .unwrap_or("")
             .to_ascii_lowercase();
         cam_core::io::write_atomic(p, |w| match ext.as_str() {
-            "obj" => cam_verify::sweep::write_obj(&v.swept, w),
-            "ply" => cam_verify::sweep::write_ply(&v.swept, w),
-            _ => cam_verify::sweep::write_stl(&v.swept, w),
+            "obj" => cam_verify::sweep::write_obj(&v.swept_surface(), w),
+            "ply" => cam_verify::sweep::write_ply(&v.swept_surface(), w),
+            _ => cam_verify::sweep::write_stl(&v.swept_surface(), w),
         })
         .with_context(|| format!("{}: cannot write", p.display()))?;
     }

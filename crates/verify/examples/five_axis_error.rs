@@ -1,14 +1,24 @@
-//! Prints the error of the imprint swept surface against the brute-force envelope for
-//! 5-axis passes (bull R = 16, r = 3, i.e. `bull:38:3`) over a plane, a cylinder and a twisted
-//! blade, for Q = 10, 20, 40, 80: signed distances of the strip vertices (imprint points) and
-//! triangle centroids to the local envelope (moves within ±1 of the triangle's), and first hits along design-surface normals (forward
-//! and reverse sweep together) against the envelope's.
+//! Prints the error of the swept surface against the brute-force envelope for 5-axis passes
+//! (bull R = 16, r = 3, i.e. `bull:38:3`) over a plane, a cylinder and a twisted blade, for
+//! Q = 10, 20, 40, 80, 160: first hits along design-surface normals (forward and back-gouge
+//! sweeps together), on the paper's piecewise-linear imprint surface ("linear") and with
+//! every crossing refined onto the exact swept volume ("exact"), each against the envelope's
+//! first hit (2000 exact tool instances per move refined by golden section, sphere-traced to
+//! 1e-9 mm). The envelope models the cutter's lower part (corner torus and flat bottom, no
+//! cylinder above it), as the verifier does. Also the signed distances of the linear
+//! surface's strip vertices (imprint points) and triangle centroids to the local envelope
+//! (moves within ±1 of the triangle's). "lines": lines both hit, of all lines, for the linear
+//! and the exact surface (the others neither hits: the pass edges beyond the tool's reach).
 //!
 //! `cargo run --release -p cam-verify --example five_axis_error [poses] [step_mm] [max_step_mm] [every] [lead_wobble_deg]`
 
 use cam_core::Cutter;
-use cam_verify::envelope::{BruteEnvelope, EnvelopeConfig, line_error, sweep_error};
-use cam_verify::sweep::{SweepConfig, sweep};
+use cam_verify::envelope::{
+    BruteEnvelope, EnvelopeConfig, compare_hits, envelope_hits, sweep_error,
+};
+use cam_verify::measure::{SurfaceModel, first_entries};
+use cam_verify::model::SweepModel;
+use cam_verify::sweep::{SweepConfig, SweptSurface};
 use cam_verify::testpaths::{PassSpec, TestSurface, normal_lines, pass};
 
 fn main() {
@@ -37,7 +47,7 @@ fn main() {
         "bull:38:3 (R=16, r=3), {poses} poses, step {step} mm, max_step {max_step} mm, lead 8±{wobble} deg, tilt 3 deg, every {every}th strip triangle"
     );
     println!(
-        "{:>9} {:>3} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>9} {:>9} {:>6}",
+        "{:>9} {:>3} {:>6} | {:>9} {:>9} | {:>9} {:>9} | {:>10} {:>10} | {:>10} {:>10} | {:>7}",
         "surface",
         "Q",
         "tris",
@@ -45,8 +55,10 @@ fn main() {
         "vert rms",
         "cent max",
         "cent rms",
-        "line max",
-        "line rms",
+        "linear max",
+        "linear rms",
+        "exact max",
+        "exact rms",
         "lines"
     );
     for (name, surface, v) in surfaces {
@@ -63,7 +75,16 @@ fn main() {
             tilt_deg: 3.0,
         };
         let path = pass(&spec, &cutter);
-        let env = BruteEnvelope::new(&path, &cutter, &EnvelopeConfig::default());
+        // The cutter's lower part, as the verifier models it (the real cutter's cylinder
+        // continues upward from the corner; lines near the pass edges could meet it first).
+        let env = BruteEnvelope::new(
+            &path,
+            &cutter,
+            &EnvelopeConfig {
+                height_mm: Some(2.0 * cutter.corner_radius()),
+                ..EnvelopeConfig::default()
+            },
+        );
         let u_end = u0 + (poses - 1) as f64 * step;
         let lines = normal_lines(
             &surface,
@@ -73,14 +94,15 @@ fn main() {
             13,
             2.0,
         );
+        let truth = envelope_hits(&env, &lines, 40.0, 1e-9);
         for q in [10usize, 20, 40, 80, 160] {
             let cfg = SweepConfig {
                 inserts: q,
                 max_step_mm: max_step,
                 ..SweepConfig::default()
             };
-            let fwd = sweep(&path, &cutter, &cfg);
-            let rev = sweep(
+            let fwd = SweepModel::new(&path, &cutter, &cfg);
+            let rev = SweepModel::new(
                 &path,
                 &cutter,
                 &SweepConfig {
@@ -88,18 +110,26 @@ fn main() {
                     ..cfg
                 },
             );
-            let e = sweep_error(&fwd, &env, every, 1);
-            let l = line_error(&[&fwd, &rev], &env, &lines, 40.0, 1e-9);
+            let models = [&fwd, &rev];
+            let lin = first_entries(&models, &path, &lines, 40.0, SurfaceModel::Linear);
+            let ex = first_entries(&models, &path, &lines, 40.0, SurfaceModel::Exact);
+            let (l, x) = (compare_hits(&lin, &truth), compare_hits(&ex, &truth));
+            let surf = SweptSurface::from_model(&fwd);
+            let e = sweep_error(&surf, &env, every, 1);
             println!(
-                "{name:>9} {q:>3} {:>6} | {:>7.3}um {:>7.3}um | {:>7.3}um {:>7.3}um | {:>7.3}um {:>7.3}um {:>3}/{}",
-                fwd.triangles.len(),
+                "{name:>9} {q:>3} {:>6} | {:>7.3}um {:>7.3}um | {:>7.3}um {:>7.3}um | {:>8.3}um {:>8.3}um | {:>8.1e}um {:>8.1e}um | {:>3}/{} {}/{}",
+                surf.triangles.len(),
                 1e3 * e.vertices.max_abs_mm,
                 1e3 * e.vertices.rms_mm,
                 1e3 * e.centroids.max_abs_mm,
                 1e3 * e.centroids.rms_mm,
                 1e3 * l.stats.max_abs_mm,
                 1e3 * l.stats.rms_mm,
+                1e3 * x.stats.max_abs_mm,
+                1e3 * x.stats.rms_mm,
                 l.stats.count,
+                lines.len(),
+                x.stats.count,
                 lines.len(),
             );
         }

@@ -1,4 +1,8 @@
-//! Signed deviation of the design surface from the swept surfaces: the normal-vector method.
+//! Signed deviation of the design surface from the swept surfaces: the normal-vector method,
+//! on a triangle soup (the paper's piecewise-linear surface). `cam_verify::verify` measures
+//! through [`crate::measure`] instead (same conventions, the triangles generated from the
+//! sweep model, crossings refined onto the exact swept volume); [`TriangleBvh`] is the
+//! reference it is tested against.
 //!
 //! From every vertex `p` of the refined design surface (normal `n`) a vector is grown from
 //! `p − L_in·n` (inside the part) to `p + L_out·n` (outside). The material left along it spans

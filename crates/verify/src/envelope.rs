@@ -335,6 +335,39 @@ pub struct LineErrorReport {
     pub misses: usize,
 }
 
+/// First hits of the lines `(origin, unit dir)` on `env` (sphere tracing to `tol_mm`) up to
+/// `max_mm`. Parallel over lines; independent of the number of threads.
+pub fn envelope_hits(
+    env: &BruteEnvelope,
+    lines: &[(DVec3, DVec3)],
+    max_mm: f64,
+    tol_mm: f64,
+) -> Vec<Option<f64>> {
+    use rayon::prelude::*;
+    lines
+        .par_iter()
+        .map(|&(o, d)| env.first_hit(o, d, max_mm, tol_mm))
+        .collect()
+}
+
+/// Compares hit distances line by line: `swept[i] − envelope[i]` where both hit.
+pub fn compare_hits(swept: &[Option<f64>], envelope: &[Option<f64>]) -> LineErrorReport {
+    let mut diffs = Vec::new();
+    let mut report = LineErrorReport::default();
+    for (i, h) in swept.iter().zip(envelope).enumerate() {
+        match h {
+            (Some(a), Some(b)) => diffs.push(a - b),
+            (None, None) => report.misses += 1,
+            (a, b) => {
+                report.disagreements += 1;
+                report.disagreeing.push((i, *a, *b));
+            }
+        }
+    }
+    report.stats = DistanceStats::of(&diffs);
+    report
+}
+
 /// Shoots each line `(origin, unit dir)` and compares the first hit on any of `surfaces`
 /// with the first hit on `env` (sphere tracing to `tol_mm`), up to `max_mm`. Parallel over
 /// lines; the result does not depend on the number of threads.

@@ -1,8 +1,12 @@
 //! cam-verify: see `docs/architecture.md`.
 pub mod deviation;
 pub mod envelope;
+pub mod exact;
 pub mod heatmap;
 pub mod imprint;
+pub mod locate;
+pub mod measure;
+pub mod model;
 pub mod pipeline;
 pub mod ply;
 pub mod refine;

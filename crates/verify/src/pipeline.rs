@@ -8,10 +8,12 @@ use std::time::Instant;
 
 use cam_core::{Cutter, Mesh, Toolpath};
 
-use crate::deviation::{self, Deviation, DeviationConfig, DeviationError, TriangleBvh};
+use crate::deviation::{Deviation, DeviationConfig, DeviationError};
+use crate::measure::{self, MeasureStats, SurfaceModel};
+use crate::model::SweepModel;
 use crate::refine::{self, RefineConfig, RefineError, RefinedMesh};
 use crate::report::{self, MeasureSettings, ReportConfig, VerifyReport};
-use crate::sweep::{self, SweepConfig, SweptSurface};
+use crate::sweep::{SweepConfig, SweptSurface};
 
 /// Everything a verification needs besides the part, the path and the cutter.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,6 +31,9 @@ pub struct VerifyConfig {
     pub back_gouge: bool,
     /// Cap on refined vertices; beyond it the refinement fails with a clear error.
     pub max_vertices: Option<usize>,
+    /// The swept surface measured against: the imprint surface's crossings refined onto the
+    /// exact swept volume (default), or the paper's piecewise-linear surface itself.
+    pub surface: SurfaceModel,
 }
 
 impl VerifyConfig {
@@ -41,6 +46,7 @@ impl VerifyConfig {
             deviation: DeviationConfig::for_tolerance(tolerance_mm),
             back_gouge: true,
             max_vertices: Some(20_000_000),
+            surface: SurfaceModel::Exact,
         }
     }
 }
@@ -82,10 +88,20 @@ pub struct Verification {
     pub refined: RefinedMesh,
     /// Signed deviation per refined vertex (negative = gouge).
     pub deviations: Vec<Deviation>,
-    /// The forward swept surface.
-    pub swept: SweptSurface,
+    /// The forward sweep (imprint curves and pieces); [`Verification::swept_surface`] gives
+    /// its triangles.
+    pub swept: SweepModel,
+    /// What the measurement did (refinements, crossings kept linear).
+    pub stats: MeasureStats,
     /// Stage timings.
     pub timings: Timings,
+}
+
+impl Verification {
+    /// The forward swept surface as triangles (for export).
+    pub fn swept_surface(&self) -> SweptSurface {
+        SweptSurface::from_model(&self.swept)
+    }
 }
 
 /// Vertices whose averaged normal is further than this from an adjacent face's normal sit
@@ -95,14 +111,16 @@ const CREASE_DEG: f64 = 10.0;
 /// At crease vertices, turns a gouge's distance along the vector into the vertex's depth
 /// inside the swept volume. There the vector runs along the averaged normal (roughly the
 /// bisector), not normal to either face, and its distance to the crossing overstates the
-/// depth (at a 90° edge by up to 1/cos 45°). The vertex's distance to the swept surface's
-/// plane at the crossing, `|t · (n_s · d)|`, is the depth to first order whatever the
-/// vector's tilt. Smooth vertices keep the paper's distance along the normal.
+/// depth (at a 90° edge by up to 1/cos 45°). On the exact surface the depth is the vertex's
+/// depth inside the volume swept by the move that cut it ([`measure::depth_inside`]); on
+/// the linear surface, its distance to the crossed triangle's plane, `|t · (n_s · d)|` (the
+/// depth to first order, `facing[i] = n_s · d`). Smooth vertices keep the paper's distance
+/// along the normal.
 fn crease_depths(
     refined: &RefinedMesh,
     devs: &mut [Deviation],
-    bvhs: &[&TriangleBvh],
-    cfg: &DeviationConfig,
+    m: &measure::Measurement,
+    exact: Option<(&[&SweepModel], &Toolpath)>,
 ) {
     let mut cos_min = vec![1.0f64; refined.positions.len()];
     for t in &refined.triangles {
@@ -123,18 +141,14 @@ fn crease_depths(
         if cos_min[i] >= crease {
             continue;
         }
-        let (p, n) = (refined.positions[i], refined.normals[i]);
-        let lowest = bvhs
-            .iter()
-            .filter_map(|b| {
-                b.lowest_hit(p, n, -cfg.inside_mm, cfg.outside_mm, |h| {
-                    cfg.facing == deviation::Facing::Any || h.facing < 0.0
-                })
-            })
-            .min_by(|x, y| x.t.total_cmp(&y.t));
-        if let Some(h) = lowest.filter(|h| h.t == s) {
-            d.signed_mm = Some(h.t * h.facing.abs().min(1.0));
-        }
+        let first_order = s * m.facing[i].abs().min(1.0);
+        let depth = match (exact, m.source[i]) {
+            (Some((models, path)), Some(src)) => {
+                measure::depth_inside(models, path, src, refined.positions[i])
+            }
+            _ => 0.0,
+        };
+        d.signed_mm = Some(if depth > 0.0 { -depth } else { first_order });
     }
 }
 
@@ -176,16 +190,17 @@ pub fn verify(
     let mut timings = Timings::default();
 
     let t = Instant::now();
-    let swept = sweep::sweep(toolpath, cutter, &cfg.sweep);
-    if swept.triangles.is_empty() {
+    let swept = SweepModel::new(toolpath, cutter, &cfg.sweep);
+    if swept.pieces.is_empty() {
         return Err(VerifyError::NothingSwept);
     }
     let reverse = cfg.back_gouge.then(|| {
-        sweep::sweep(
+        SweepModel::new(
             toolpath,
             cutter,
             &SweepConfig {
                 reverse: true,
+                rotating_only: cfg.surface == SurfaceModel::Exact,
                 ..cfg.sweep
             },
         )
@@ -204,23 +219,38 @@ pub fn verify(
     timings.refine_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
-    let bvh = TriangleBvh::new(&swept.triangles);
-    let mut devs = deviation::measure_with_bvh(&refined, &bvh, &swept.source_move, &cfg.deviation)?;
-    let rev_bvh = reverse.as_ref().map(|r| TriangleBvh::new(&r.triangles));
-    if let (Some(rev), Some(rb)) = (&reverse, &rev_bvh) {
-        let back = deviation::measure_with_bvh(&refined, rb, &rev.source_move, &cfg.deviation)?;
-        devs = deviation::merge_lowest(&devs, &back);
-    }
-    let mut bvhs = vec![&bvh];
-    bvhs.extend(rev_bvh.as_ref());
-    crease_depths(&refined, &mut devs, &bvhs, &cfg.deviation);
+    let mut models = vec![&swept];
+    models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
+    let m = measure::measure(&refined, &models, toolpath, &cfg.deviation, cfg.surface)?;
+    let mut devs = m.deviations.clone();
+    let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));
+    crease_depths(&refined, &mut devs, &m, exact);
     timings.measure_s = t.elapsed().as_secs_f64();
 
     let lines: Vec<Option<usize>> = toolpath.moves.iter().map(|m| m.line).collect();
     let mut extra = BTreeMap::new();
     extra.insert("inserts".to_string(), cfg.sweep.inserts as f64);
     extra.insert("max_step_mm".to_string(), cfg.sweep.max_step_mm);
-    extra.insert("swept_triangles".to_string(), swept.triangles.len() as f64);
+    extra.insert(
+        "swept_triangle_slots".to_string(),
+        (0..swept.pieces.len())
+            .map(|i| swept.slots(i))
+            .sum::<usize>() as f64,
+    );
+    extra.insert("imprint_points".to_string(), swept.imprint_points as f64);
+    extra.insert(
+        "exact_surface".to_string(),
+        if cfg.surface == SurfaceModel::Exact {
+            1.0
+        } else {
+            0.0
+        },
+    );
+    extra.insert("refined_vectors".to_string(), m.stats.refined as f64);
+    extra.insert(
+        "kept_linear_vectors".to_string(),
+        m.stats.kept_linear as f64,
+    );
     extra.insert(
         "back_gouge".to_string(),
         if cfg.back_gouge { 1.0 } else { 0.0 },
@@ -238,6 +268,7 @@ pub fn verify(
         refined,
         deviations: devs,
         swept,
+        stats: m.stats,
         timings,
     })
 }

@@ -1,5 +1,6 @@
 //! The surface swept by a cutter along a 3- or 5-axis toolpath, from imprint curves
-//! (Roth, Bedi, Ismail, Mann 2000, §3.3), as a triangle soup.
+//! (Roth, Bedi, Ismail, Mann 2000, §3.3), as a triangle soup generated from the compact
+//! [`crate::model::SweepModel`].
 //!
 //! # What sweeps
 //! Only feed moves ([`MoveKind::Cut`], [`MoveKind::Plunge`], [`MoveKind::Retract`]) sweep; a
@@ -35,11 +36,10 @@
 
 use std::io::{self, Write};
 
-use cam_core::{Cutter, DVec3, MoveKind, Pose, Toolpath, Triangle};
+use cam_core::{Cutter, DVec3, Toolpath, Triangle};
 
-use crate::imprint::{
-    CurveStatus, Difference, Half, ImprintConfig, Imprinter, Placement, PoseFrame, transport_frames,
-};
+use crate::imprint::{Difference, Placement};
+use crate::model::SweepModel;
 
 /// How to sweep.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +59,11 @@ pub struct SweepConfig {
     /// A turn of the motion direction above this angle (degrees) breaks the surface and caps
     /// both sides. Default 30.
     pub sharp_turn_deg: f64,
+    /// Sweep only the moves whose tool axis turns; the others end a stretch like a rapid.
+    /// The verifier's back-gouge sweep uses it when it refines onto the exact swept volume,
+    /// which for a move without rotation already holds the whole tool (see
+    /// [`crate::measure`]). Default false.
+    pub rotating_only: bool,
 }
 
 impl Default for SweepConfig {
@@ -70,6 +75,7 @@ impl Default for SweepConfig {
             max_step_mm: 0.5,
             reverse: false,
             sharp_turn_deg: 30.0,
+            rotating_only: false,
         }
     }
 }
@@ -95,223 +101,26 @@ pub struct SweptSurface {
     pub kind: Vec<FacetKind>,
 }
 
-/// A run of poses joined by feed steps; `step_move[i]` is the move of step `i → i+1`.
-#[derive(Debug, Clone, Default)]
-struct Stretch {
-    poses: Vec<Pose>,
-    step_move: Vec<u32>,
-}
-
-fn interpolate(a: &Pose, b: &Pose, t: f64) -> Pose {
-    let axis = a.axis.lerp(b.axis, t);
-    let l = axis.length();
-    Pose {
-        tip: a.tip.lerp(b.tip, t),
-        axis: if l > 1e-12 { axis / l } else { a.axis },
-    }
-}
-
-/// The stretches of consecutive feed moves, subdivided.
-fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch> {
-    let max_step = if cfg.max_step_mm.is_finite() && cfg.max_step_mm > 0.0 {
-        cfg.max_step_mm
-    } else {
-        f64::INFINITY
-    };
-    let mut out = Vec::new();
-    let mut cur = Stretch::default();
-    for (i, w) in path.moves.windows(2).enumerate() {
-        let idx = (i + 1) as u32;
-        let (a, b) = (&w[0].pose, &w[1].pose);
-        if w[1].kind == MoveKind::Rapid {
-            if cur.poses.len() >= 2 {
-                out.push(std::mem::take(&mut cur));
-            }
-            cur = Stretch::default();
-            continue;
+impl SweptSurface {
+    /// The triangles of `model`, in emission order (see [`crate::model`]).
+    pub fn from_model(model: &SweepModel) -> SweptSurface {
+        let mut surface = SweptSurface::default();
+        for (i, piece) in model.pieces.iter().enumerate() {
+            let (mv, kind) = (piece.source_move(), piece.kind());
+            model.for_each_triangle(i, |_, t| {
+                surface.triangles.push(t);
+                surface.source_move.push(mv);
+                surface.kind.push(kind);
+            });
         }
-        let len = a.tip.distance(b.tip) + a.axis.distance(b.axis) * cutter.radius();
-        let n = if len.is_finite() && max_step.is_finite() {
-            ((len / max_step).ceil() as usize).clamp(1, 1_000_000)
-        } else {
-            1
-        };
-        if cur.poses.is_empty() {
-            cur.poses.push(*a);
-        }
-        for s in 1..=n {
-            let p = interpolate(a, b, s as f64 / n as f64);
-            let last = cur.poses.last().copied().unwrap_or(p);
-            if p.tip.distance(last.tip) <= 1e-12 && p.axis.distance(last.axis) <= 1e-12 {
-                continue;
-            }
-            cur.poses.push(p);
-            cur.step_move.push(idx);
-        }
-    }
-    if cur.poses.len() >= 2 {
-        out.push(cur);
-    }
-    if cfg.reverse {
-        out.reverse();
-        for s in &mut out {
-            s.poses.reverse();
-            s.step_move.reverse();
-        }
-    }
-    out
-}
-
-/// Pose indices where a stretch breaks (first and last included).
-fn breaks(frames: &[PoseFrame], sharp_turn_deg: f64) -> Vec<usize> {
-    let cos_limit = sharp_turn_deg.to_radians().cos();
-    let mut out = vec![0];
-    let dir = |i: usize| {
-        let d = frames[i + 1].centre - frames[i].centre;
-        let l = d.length();
-        (l > 1e-12).then(|| d / l)
-    };
-    for p in 1..frames.len() - 1 {
-        if let (Some(a), Some(b)) = (dir(p - 1), dir(p))
-            && a.dot(b) < cos_limit
-        {
-            out.push(p);
-        }
-    }
-    out.push(frames.len() - 1);
-    out
-}
-
-/// Appends the triangle `(a, b, c)` oriented away from `inside`, unless degenerate.
-fn push(surface: &mut SweptSurface, t: [DVec3; 3], inside: DVec3, mv: u32, kind: FacetKind) {
-    let mut tri = Triangle::new(t[0], t[1], t[2]);
-    if tri.is_degenerate() {
-        return;
-    }
-    let centroid = (t[0] + t[1] + t[2]) / 3.0;
-    if tri.cross().dot(centroid - inside) < 0.0 {
-        tri.v.swap(1, 2);
-    }
-    surface.triangles.push(tri);
-    surface.source_move.push(mv);
-    surface.kind.push(kind);
-}
-
-/// Appends the tessellated lower surface of the tool at `f`: `sectors` around, `rings`
-/// profile segments on the corner, a fan over the flat bottom.
-pub fn push_cap(
-    surface: &mut SweptSurface,
-    cutter: &Cutter,
-    f: &PoseFrame,
-    sectors: usize,
-    rings: usize,
-    mv: u32,
-) {
-    let (a, r) = (cutter.major_radius(), cutter.corner_radius());
-    let k = f.axis;
-    let tip = f.tip(r);
-    let inside = f.centre + cutter.radius() * k;
-    let ring_pt = |phi: f64, ring: usize| {
-        let u = phi.cos() * f.e1 + phi.sin() * f.e2;
-        let theta = std::f64::consts::FRAC_PI_2 * ring as f64 / rings as f64;
-        f.centre + a * u + r * (theta.sin() * u - theta.cos() * k)
-    };
-    let step = 2.0 * std::f64::consts::PI / sectors as f64;
-    for s in 0..sectors {
-        let (p0, p1) = (s as f64 * step, (s + 1) as f64 * step);
-        if a > 0.0 {
-            push(
-                surface,
-                [tip, ring_pt(p0, 0), ring_pt(p1, 0)],
-                inside,
-                mv,
-                FacetKind::Cap,
-            );
-        }
-        if r > 0.0 {
-            for g in 0..rings {
-                let q = [
-                    ring_pt(p0, g),
-                    ring_pt(p1, g),
-                    ring_pt(p1, g + 1),
-                    ring_pt(p0, g + 1),
-                ];
-                push(surface, [q[0], q[1], q[2]], inside, mv, FacetKind::Cap);
-                push(surface, [q[0], q[2], q[3]], inside, mv, FacetKind::Cap);
-            }
-        }
-    }
-}
-
-/// Joins two imprint curves into strip triangles.
-fn push_strip(surface: &mut SweptSurface, c0: &[DVec3], c1: &[DVec3], inside: DVec3, mv: u32) {
-    for j in 0..c0.len() - 1 {
-        let (a, b, c, d) = (c0[j], c0[j + 1], c1[j + 1], c1[j]);
-        push(surface, [a, b, c], inside, mv, FacetKind::Strip);
-        push(surface, [a, c, d], inside, mv, FacetKind::Strip);
+        surface
     }
 }
 
 /// Sweeps `cutter` along the feed moves of `toolpath`: imprint strips plus caps at segment
 /// ends (see the module docs). Deterministic and independent of the number of threads.
 pub fn sweep(toolpath: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> SweptSurface {
-    let imp = Imprinter::new(
-        cutter,
-        &ImprintConfig {
-            inserts: cfg.inserts,
-            placement: cfg.placement,
-            difference: cfg.difference,
-        },
-    );
-    let q = imp.inserts();
-    let rings = (q / 4).max(2);
-    let half = if cfg.reverse {
-        Half::Complement
-    } else {
-        Half::Cutting
-    };
-    let l = imp.points_per_curve();
-    let cos_limit = cfg.sharp_turn_deg.to_radians().cos();
-    let mut surface = SweptSurface::default();
-    for st in stretches(toolpath, cutter, cfg) {
-        let frames = transport_frames(&st.poses, cutter.corner_radius());
-        let cuts = breaks(&frames, cfg.sharp_turn_deg);
-        for (si, w) in cuts.windows(2).enumerate() {
-            let (s, e) = (w[0], w[1]);
-            let seg = &frames[s..=e];
-            let mut pts = vec![DVec3::ZERO; seg.len() * l];
-            let info = imp.curves(seg, half, &mut pts);
-            if si == 0 {
-                push_cap(&mut surface, cutter, &seg[0], q, rings, st.step_move[s]);
-            }
-            for p in 0..seg.len() - 1 {
-                let (i0, i1) = (&info[p], &info[p + 1]);
-                if i0.status == CurveStatus::NoMotion || i1.status == CurveStatus::NoMotion {
-                    continue;
-                }
-                let mv = st.step_move[s + p];
-                if i0.front.dot(i1.front) < cos_limit {
-                    // The imprinted half flips between these poses (a reversal relative to
-                    // the tool): no strip; cap both poses.
-                    push_cap(&mut surface, cutter, &seg[p], q, rings, mv);
-                    push_cap(&mut surface, cutter, &seg[p + 1], q, rings, mv);
-                    continue;
-                }
-                let (c0, c1) = (&pts[p * l..(p + 1) * l], &pts[(p + 1) * l..(p + 2) * l]);
-                let inside = seg[p].centre + cutter.radius() * seg[p].axis;
-                push_strip(&mut surface, c0, c1, inside, mv);
-            }
-            push_cap(
-                &mut surface,
-                cutter,
-                &seg[seg.len() - 1],
-                q,
-                rings,
-                st.step_move[e - 1],
-            );
-        }
-    }
-    surface
+    SweptSurface::from_model(&SweepModel::new(toolpath, cutter, cfg))
 }
 
 /// Writes the surface as binary STL.

@@ -425,6 +425,90 @@ pub fn machine(toolpath: &Toolpath, cutter: &Cutter, cfg: &ZmapConfig) -> Result
     })
 }
 
+/// The machined height at arbitrary points `(x, y)` (mm): for each, the minimum over every
+/// move (rapids included) of the cutter's lower surface above it, with the index of the
+/// move (the smallest among equals), or `None` where no move reaches. The same per-move
+/// minimisation as [`machine`], for points off a grid; moves are bucketed by their XY reach.
+/// Parallel over points; independent of the number of threads.
+///
+/// # Errors
+/// [`ZmapError::NotVertical`], [`ZmapError::NonFinite`] as [`machine`].
+pub fn heights_at(
+    toolpath: &Toolpath,
+    cutter: &Cutter,
+    points: &[(f64, f64)],
+) -> Result<Vec<Option<(f64, u32)>>, ZmapError> {
+    for (index, mv) in toolpath.moves.iter().enumerate() {
+        if (mv.pose.axis - DVec3::Z).length() > 1e-9 {
+            return Err(ZmapError::NotVertical {
+                index,
+                axis: mv.pose.axis,
+            });
+        }
+        if !mv.pose.tip.is_finite() {
+            return Err(ZmapError::NonFinite {
+                index,
+                tip: mv.pose.tip,
+            });
+        }
+    }
+    let prof = Profile::new(cutter);
+    let rr = prof.big_r;
+    let segs: Vec<(DVec3, DVec3)> = toolpath
+        .moves
+        .iter()
+        .enumerate()
+        .map(|(i, mv)| {
+            let a = if i == 0 {
+                mv.pose.tip
+            } else {
+                toolpath.moves[i - 1].pose.tip
+            };
+            (a, mv.pose.tip)
+        })
+        .collect();
+    if segs.is_empty() {
+        return Ok(vec![None; points.len()]);
+    }
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for (a, b) in &segs {
+        lo = lo.min(a.min(*b));
+        hi = hi.max(a.max(*b));
+    }
+    let cell = rr.max(1e-3);
+    let nx = (((hi.x - lo.x + 2.0 * rr) / cell).ceil() as usize).clamp(1, 4096);
+    let ny = (((hi.y - lo.y + 2.0 * rr) / cell).ceil() as usize).clamp(1, 4096);
+    let (x0, y0) = (lo.x - rr, lo.y - rr);
+    let cx = |x: f64| (((x - x0) / cell).floor().max(0.0) as usize).min(nx - 1);
+    let cy = |y: f64| (((y - y0) / cell).floor().max(0.0) as usize).min(ny - 1);
+    let mut buckets: Vec<Vec<u32>> = vec![Vec::new(); nx * ny];
+    for (k, (a, b)) in segs.iter().enumerate() {
+        for j in cy(a.y.min(b.y) - rr)..=cy(a.y.max(b.y) + rr) {
+            for i in cx(a.x.min(b.x) - rr)..=cx(a.x.max(b.x) + rr) {
+                buckets[j * nx + i].push(k as u32);
+            }
+        }
+    }
+    Ok(points
+        .par_iter()
+        .map(|&(x, y)| {
+            if x < x0 || y < y0 || x > x0 + nx as f64 * cell || y > y0 + ny as f64 * cell {
+                return None;
+            }
+            let mut best: Option<(f64, u32)> = None;
+            for &k in &buckets[cy(y) * nx + cx(x)] {
+                let (a, b) = segs[k as usize];
+                if let Some(z) = prof.move_min(x, y, a, b)
+                    && best.is_none_or(|(bz, bk)| z < bz || (z == bz && k < bk))
+                {
+                    best = Some((z, k));
+                }
+            }
+            best
+        })
+        .collect())
+}
+
 /// Top-surface heights of a part by exact vertical ray casts, with a 2-D bucket grid over
 /// the triangles' XY bounds.
 #[derive(Debug, Clone)]

@@ -6,3 +6,4 @@ mod plan_checks;
 mod plan_rs274;
 mod support;
 mod verify;
+mod verify_zmap;

@@ -109,3 +109,48 @@ fn bad_gcode_names_line_and_column_exit_2() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("bad.apt:1"), "{}", stderr(&o));
 }
+
+/// `--surface linear` measures the paper's piecewise-linear surface, `exact` (the default)
+/// the refined one: a ball 0.1 mm below the plane reads a 0.1 mm gouge on the exact surface
+/// to rounding, and at most that on the linear one (its chords lie inside the tool).
+#[test]
+fn surface_flag_selects_linear_or_exact() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "sq.obj", SQUARE_OBJ);
+    let ngc = write(d.path(), "p.ngc", &pass_at(0.9));
+    let gouge = |surface: &str| {
+        let o = cam(&[
+            "verify",
+            ngc.to_str().unwrap(),
+            "--part",
+            part.to_str().unwrap(),
+            "--tool",
+            "ball:6",
+            "--surface",
+            surface,
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(
+            j["settings"]["extra"]["exact_surface"].as_f64(),
+            Some(if surface == "exact" { 1.0 } else { 0.0 }),
+            "{j}"
+        );
+        j["max_gouge_mm"].as_f64().unwrap()
+    };
+    let (exact, linear) = (gouge("exact"), gouge("linear"));
+    assert!((exact - 0.1).abs() < 1e-9, "exact {exact}");
+    assert!(linear <= exact + 1e-12 && linear > 0.09, "linear {linear}");
+    let o = cam(&[
+        "verify",
+        ngc.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        "ball:6",
+        "--surface",
+        "cubic",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+}

@@ -350,3 +350,39 @@ fn comparison_finds_scallop_and_gouge() {
     let z1 = one.install(|| zmap::machine(&tp, &ball, &cfg).unwrap());
     assert_eq!(z, z1);
 }
+
+/// The z-map at arbitrary points gives the grid's values at its nodes, bit for bit, and the
+/// same lowering moves.
+#[test]
+fn heights_at_points_equal_the_grid() {
+    let mut g = Lcg(11);
+    let mut pts = Vec::new();
+    for _ in 0..40 {
+        pts.push((
+            g.next() * 16.0 - 8.0,
+            g.next() * 16.0 - 8.0,
+            g.next() * 4.0 - 2.0,
+        ));
+    }
+    let tp = path(&pts);
+    for spec in ["ball:6", "bull:10:2", "flat:8"] {
+        let c: Cutter = spec.parse().unwrap();
+        let cfg = grid(-10.0, -10.0, 10.0, 10.0, 0.5);
+        let z = zmap::machine(&tp, &c, &cfg).unwrap();
+        let gr = z.grid;
+        let nodes: Vec<(f64, f64)> = (0..gr.ny)
+            .flat_map(|j| (0..gr.nx).map(move |i| (gr.x(i), gr.y(j))))
+            .collect();
+        let at = zmap::heights_at(&tp, &c, &nodes).unwrap();
+        for (k, h) in at.iter().enumerate() {
+            match (h, z.lowered_by[k]) {
+                (Some((hz, mv)), Some(lm)) => {
+                    assert_eq!(*hz, z.heights[k], "{spec} node {k}");
+                    assert_eq!(*mv, lm, "{spec} node {k}");
+                }
+                (None, None) => {}
+                other => panic!("{spec} node {k}: {other:?}"),
+            }
+        }
+    }
+}

@@ -1,0 +1,781 @@
+//! Exact first entry of a line into the volume the cutter sweeps along one toolpath move:
+//! the refinement of a crossing found on the piecewise-linear imprint surface.
+//!
+//! # Tool model
+//! The cutter's lower part as a solid, the *puck*: every point within `r` (corner radius) of
+//! the disk of radius `a` (major radius) centred on the torus centre `c = tip + r·k`,
+//! perpendicular to the axis `k`. Below the centre plane this is exactly the cutter's lower
+//! surface (flat bottom and corner torus); above it the puck lies inside the real cutter
+//! (whose cylinder continues upward), so an entry into the puck is an entry into the cutter.
+//! A ball is the sphere of radius `r` about `c`; a flat end mill (`r = 0`) is the disk itself.
+//!
+//! # Motion model
+//! As in [`crate::sweep`]: along move `A → B` the tip moves linearly and the axis is
+//! interpolated linearly and renormalised, parameter `u ∈ [0, 1]`.
+//!
+//! # What is computed
+//! For the line `x(s) = o + s·n` (unit `n`), `s ∈ [lo, hi]`, the smallest `s` with `x(s)` in
+//! the union of the puck instances — or `lo` when `x(lo)` is already inside. Every answer is
+//! a point where the line enters some instance, so it is never below the true first entry
+//! into the volume swept by the whole path; for the instance set searched it is exact:
+//! - **translation** (equal axes at both ends): the union over the move is convex (the
+//!   Minkowski sum of the puck and a segment). Ball: the capsule, in closed form. Otherwise
+//!   `F(s) = min_u dist(x(s) − c(u), disk) − r` is convex in `s` and in `u`; Newton on `F`
+//!   from the left of its first root (monotone, never overshooting) with the inner minimum
+//!   found as the root of its monotone derivative (Illinois regula falsi).
+//! - **one pose** (a cap): the same with the segment reduced to a point.
+//! - **rotation**: Newton on the continuous imprint surface `m(u, ψ)`: the Eq. 2 point of the
+//!   insert at body angle `ψ` on the pose at `u`, with the insert's exact velocity
+//!   `dT/du = tip' + r·k' − a·(k'·û)·k` (the body turning by `ω = k × k'`, the rotation-
+//!   minimising motion; any spin about the axis leaves the solid of revolution unchanged).
+//!   Where that does not converge to an entry point on the cutting quarter, the minimum over
+//!   `u` of the one-pose entries is taken by golden-section search: exact where that function
+//!   is unimodal on the searched interval (one step either side of the crossing).
+
+use cam_core::{DVec3, Pose};
+
+use crate::imprint::minimal_rotation;
+
+/// A line `o + s·n` searched for `s ∈ [lo, hi]` (mm); `n` is a unit vector.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Line {
+    /// Origin (mm).
+    pub o: DVec3,
+    /// Unit direction.
+    pub n: DVec3,
+    /// Smallest `s` searched (mm).
+    pub lo: f64,
+    /// Largest `s` searched (mm).
+    pub hi: f64,
+}
+
+impl Line {
+    fn at(&self, s: f64) -> DVec3 {
+        self.o + s * self.n
+    }
+}
+
+/// Where a line enters the swept volume.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Entry {
+    /// Line parameter of the entry (mm).
+    pub s: f64,
+    /// Outward unit normal of the cutter surface there (`−n` when the line starts inside).
+    pub normal: DVec3,
+}
+
+/// The cutter's lower part: disk radius `a` and corner radius `r` (mm).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Puck {
+    /// Major radius `a` (mm).
+    pub a: f64,
+    /// Corner radius `r` (mm).
+    pub r: f64,
+}
+
+impl Puck {
+    /// Distance (mm) from `y` (relative to the torus centre) to the disk of radius `a`
+    /// perpendicular to `k`, and the unit direction from the disk's nearest point to `y`
+    /// (zero when `y` lies on the disk).
+    #[inline]
+    fn disk_distance(&self, y: DVec3, k: DVec3) -> (f64, DVec3) {
+        let z = y.dot(k);
+        let h = y - z * k;
+        let rho = h.length();
+        if rho <= self.a {
+            let d = z.abs();
+            let g = if z > 0.0 {
+                k
+            } else if z < 0.0 {
+                -k
+            } else {
+                DVec3::ZERO
+            };
+            (d, g)
+        } else {
+            let e = rho - self.a;
+            let d = e.hypot(z);
+            if d > 0.0 {
+                (d, (e / rho * h + z * k) / d)
+            } else {
+                (0.0, DVec3::ZERO)
+            }
+        }
+    }
+}
+
+const NEWTON_ITERS: usize = 80;
+/// A line point this close to a convex set (mm) is on it.
+const ROOT_TOL_MM: f64 = 1e-12;
+
+/// The first root of the convex function `f` on `[lo, hi]` by Newton's method from `lo`
+/// (`f` returns value and gradient; the derivative is `gradient · n`). For convex `f` the
+/// iterates increase monotonically and stay left of the first root; a non-negative slope with
+/// `f > 0` proves there is none. Returns the root and the gradient at the last iterate still
+/// outside (`f > 0`): the outward normal there, well defined even for a set without
+/// thickness (a flat end mill's disk), where the gradient at the root itself is not.
+fn first_root_convex(
+    lo: f64,
+    hi: f64,
+    mut f: impl FnMut(f64) -> (f64, DVec3),
+    n: DVec3,
+) -> Option<(f64, DVec3)> {
+    let mut s = lo;
+    let (mut v, mut g) = f(s);
+    // Within the tolerance counts as inside, as for the iterates below (a set without
+    // thickness is never at distance exactly 0 from a computed point).
+    if v <= ROOT_TOL_MM {
+        return Some((lo, -n));
+    }
+    for _ in 0..NEWTON_ITERS {
+        let slope = g.dot(n);
+        if slope.is_nan() || slope >= 0.0 {
+            return None;
+        }
+        let next = s - v / slope;
+        if next.is_nan() || next <= s {
+            return Some((s, g));
+        }
+        if next > hi {
+            // Check the end: the root may lie just before it.
+            let (vh, _) = f(hi);
+            return (vh <= 0.0).then_some((hi, g));
+        }
+        let (nv, ng) = f(next);
+        // On the surface to 1e-12 mm: the gradient there is not reliable any more (for a
+        // set without thickness it points anywhere), so stop with the last good one.
+        if nv <= ROOT_TOL_MM || next - s <= 1e-15 * (1.0 + s.abs()) {
+            return Some((next, g));
+        }
+        (s, v, g) = (next, nv, ng);
+    }
+    Some((s, g))
+}
+
+/// First entry of `line` into the puck at torus centre `c`, axis `k`.
+pub fn puck_entry(line: &Line, puck: &Puck, c: DVec3, k: DVec3) -> Option<Entry> {
+    let f = |s: f64| {
+        let (d, g) = puck.disk_distance(line.at(s) - c, k);
+        (d - puck.r, g)
+    };
+    first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
+}
+
+/// The interval of `s` where `|o + s·n − c|² ≤ r²`, if any.
+fn sphere_interval(o: DVec3, n: DVec3, c: DVec3, r: f64) -> Option<(f64, f64)> {
+    let m = o - c;
+    let b = m.dot(n);
+    let cc = m.length_squared() - r * r;
+    let disc = b * b - cc;
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let sq = disc.sqrt();
+    // Stable roots.
+    let q = -b - b.signum() * sq;
+    let (r1, r2) = if q != 0.0 { (q, cc / q) } else { (-b, -b) };
+    Some((r1.min(r2), r1.max(r2)))
+}
+
+/// First entry of `line` into the capsule of radius `r` about the segment `c0 c1` (a ball
+/// swept along a straight move).
+pub fn capsule_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry> {
+    let (o, n) = (line.o, line.n);
+    let mut best: Option<(f64, DVec3)> = None;
+    let mut take = |s_in: f64, s_out: f64, normal_at: &dyn Fn(f64) -> DVec3| {
+        if s_out < line.lo || s_in > line.hi || s_in > s_out {
+            return;
+        }
+        let s = s_in.max(line.lo);
+        if best.is_none_or(|(b, _)| s < b) {
+            let nm = if s_in < line.lo { -n } else { normal_at(s) };
+            best = Some((s, nm));
+        }
+    };
+    for c in [c0, c1] {
+        if let Some((a, b)) = sphere_interval(o, n, c, r) {
+            take(a, b, &|s| ((o + s * n - c) / r).normalize_or(-n));
+        }
+    }
+    let d = c1 - c0;
+    let dd = d.length_squared();
+    if dd > 0.0 {
+        let dh = d / dd.sqrt();
+        // Perpendicular parts.
+        let m = o - c0;
+        let mp = m - m.dot(dh) * dh;
+        let np = n - n.dot(dh) * dh;
+        let qa = np.length_squared();
+        let qb = mp.dot(np);
+        let qc = mp.length_squared() - r * r;
+        let cyl = if qa > 1e-300 {
+            let disc = qb * qb - qa * qc;
+            (disc >= 0.0).then(|| {
+                let sq = disc.sqrt();
+                ((-qb - sq) / qa, (-qb + sq) / qa)
+            })
+        } else {
+            (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY))
+        };
+        if let Some((c_in, c_out)) = cyl {
+            // Slab 0 ≤ (x − c0)·d ≤ |d|².
+            let (p0, pn) = (m.dot(d), n.dot(d));
+            let (t_in, t_out) = if pn.abs() > 1e-300 {
+                let (ta, tb) = (-p0 / pn, (dd - p0) / pn);
+                (ta.min(tb), ta.max(tb))
+            } else if (0.0..=dd).contains(&p0) {
+                (f64::NEG_INFINITY, f64::INFINITY)
+            } else {
+                (1.0, -1.0)
+            };
+            let (s_in, s_out) = (c_in.max(t_in), c_out.min(t_out));
+            take(s_in, s_out, &|s| {
+                let x = o + s * n - c0;
+                (x - x.dot(dh) * dh).normalize_or(-n)
+            });
+        }
+    }
+    best.map(|(s, normal)| Entry { s, normal })
+}
+
+/// The minimum over `u ∈ [0, 1]` of `dist(y − u·d, disk) ` (disk about the origin, axis `k`)
+/// with the minimiser and the gradient direction there. The function is convex in `u`; its
+/// derivative `−g·d` is continuous and non-decreasing where the distance is positive.
+fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3) -> (f64, DVec3, f64) {
+    let at = |u: f64| puck.disk_distance(y - u * d, k);
+    let slope = |g: DVec3| -g.dot(d);
+    let (d0, g0) = at(0.0);
+    if slope(g0) >= 0.0 || d0 == 0.0 {
+        return (d0, g0, 0.0);
+    }
+    let (d1, g1) = at(1.0);
+    if slope(g1) <= 0.0 || d1 == 0.0 {
+        return (d1, g1, 1.0);
+    }
+    // Illinois on the slope, bracket [a, b] with slope(a) < 0 < slope(b).
+    let (mut a, mut b) = (0.0f64, 1.0f64);
+    let (mut fa, mut fb) = (slope(g0), slope(g1));
+    let mut best = if d0 <= d1 {
+        (d0, g0, 0.0)
+    } else {
+        (d1, g1, 1.0)
+    };
+    let mut side = 0i8;
+    for it in 0..100 {
+        let mut t = if it % 5 == 4 {
+            0.5 * (a + b)
+        } else {
+            (a * fb - b * fa) / (fb - fa)
+        };
+        if !(t > a && t < b) {
+            t = 0.5 * (a + b);
+        }
+        let (dt, gt) = at(t);
+        if dt < best.0 {
+            best = (dt, gt, t);
+        }
+        let ft = slope(gt);
+        if ft == 0.0 || dt == 0.0 {
+            return (dt, gt, t);
+        }
+        if ft > 0.0 {
+            b = t;
+            fb = ft;
+            if side == 1 {
+                fa *= 0.5;
+            }
+            side = 1;
+        } else {
+            a = t;
+            fa = ft;
+            if side == -1 {
+                fb *= 0.5;
+            }
+            side = -1;
+        }
+        if b - a <= 1e-15 {
+            break;
+        }
+    }
+    best
+}
+
+/// First entry of `line` into the puck swept along the straight, non-rotating move of the
+/// torus centre `c0 → c1` with axis `k`: in closed form for a ball ([`capsule_entry`]) and a
+/// flat end mill ([`disk_translation_entry`]), otherwise by [`convex_translation_entry`].
+pub fn translation_entry(
+    line: &Line,
+    puck: &Puck,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+) -> Option<Entry> {
+    if puck.a == 0.0 {
+        return capsule_entry(line, c0, c1, puck.r);
+    }
+    if puck.r == 0.0 {
+        return disk_translation_entry(line, puck.a, c0, c1, k);
+    }
+    convex_translation_entry(line, puck, c0, c1, k)
+}
+
+/// The parameter interval where `|w0 + t·w1| ≤ a` (unbounded when `w1 = 0` and `|w0| ≤ a`).
+fn disk_interval(w0: DVec3, w1: DVec3, a: f64) -> Option<(f64, f64)> {
+    let qa = w1.length_squared();
+    let qb = w0.dot(w1);
+    let qc = w0.length_squared() - a * a;
+    if qa == 0.0 {
+        return (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let disc = qb * qb - qa * qc;
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    // Stable roots.
+    let q = -qb - qb.signum() * disc.sqrt();
+    let (r1, r2) = if q != 0.0 {
+        (q / qa, qc / q)
+    } else {
+        (0.0, 0.0)
+    };
+    Some((r1.min(r2), r1.max(r2)))
+}
+
+/// First entry of `line` into the disk of radius `a` (centre `c0`, axis `k`) swept along the
+/// straight move `c0 → c1`: a flat end mill's translation, in closed form. The swept set is
+/// the sheared cylinder `{c0 + u·d + h : u ∈ [0, 1], h ⟂ k, |h| ≤ a}` (flat when the move is
+/// level); a line meets it where the axial coordinate puts it at some `u ∈ [0, 1]` and the
+/// remaining radial offset `w` is at most `a` — a quadratic in one parameter. The line is
+/// parametrised by `u` where the move climbs less than the line does over the move's length,
+/// else by `s`, so that neither parametrisation amplifies rounding. Returns the entry with the
+/// outward normal there (a cap's `±k`, the mantle's gradient, `−n` when `x(lo)` is inside;
+/// for a level move, the side of the disk the line comes from).
+pub fn disk_translation_entry(
+    line: &Line,
+    a: f64,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+) -> Option<Entry> {
+    let (o, n) = (line.o, line.n);
+    let d = c1 - c0;
+    // A climb within the root tolerance is level: the set is then within that distance of
+    // the flat one, and the mantle's orientation is not computable from rounding noise.
+    let dz = Some(d.dot(k))
+        .filter(|z| z.abs() > ROOT_TOL_MM)
+        .unwrap_or(0.0);
+    let dh = d - dz * k;
+    let m = o - c0;
+    let (q0, nk) = (m.dot(k), n.dot(k));
+    let (mh, nh) = (m - q0 * k, n - nk * k);
+    // Which bound is active at the entry.
+    #[derive(Clone, Copy)]
+    enum At {
+        Cap0,
+        Cap1,
+        Mantle,
+    }
+    let (s_in, s_out, at) = if nk != 0.0 && dz.abs() <= nk.abs() * d.length() {
+        // s(u) = (u·dz − q0)/nk; w(u) = mh + s(u)·nh − u·dh.
+        let w0 = mh - (q0 / nk) * nh;
+        let w1 = (dz / nk) * nh - dh;
+        let (t1, t2) = disk_interval(w0, w1, a)?;
+        let (u1, u2) = (t1.max(0.0), t2.min(1.0));
+        if u1 > u2 {
+            return None;
+        }
+        let s_of = |u: f64| (u * dz - q0) / nk;
+        if dz / nk >= 0.0 {
+            let at = if t1 <= 0.0 { At::Cap0 } else { At::Mantle };
+            (s_of(u1), s_of(u2), at)
+        } else {
+            let at = if t2 >= 1.0 { At::Cap1 } else { At::Mantle };
+            (s_of(u2), s_of(u1), at)
+        }
+    } else {
+        if dz == 0.0 {
+            // A level move and a line parallel to the disk: only lines in its plane meet it.
+            return None;
+        }
+        // u(s) = (q0 + s·nk)/dz; w(s) = mh + s·nh − u(s)·dh.
+        let w0 = mh - (q0 / dz) * dh;
+        let w1 = nh - (nk / dz) * dh;
+        let (t1, t2) = disk_interval(w0, w1, a)?;
+        // The slab 0 ≤ u(s) ≤ 1.
+        let (slab, cap_in) = if nk != 0.0 {
+            let (sa, sb) = (-q0 / nk, (dz - q0) / nk);
+            if sa <= sb {
+                ((sa, sb), At::Cap0)
+            } else {
+                ((sb, sa), At::Cap1)
+            }
+        } else if (0.0..=1.0).contains(&(q0 / dz)) {
+            ((f64::NEG_INFINITY, f64::INFINITY), At::Mantle)
+        } else {
+            return None;
+        };
+        let at = if slab.0 >= t1 { cap_in } else { At::Mantle };
+        (t1.max(slab.0), t2.min(slab.1), at)
+    };
+    if s_in.is_nan() || s_out.is_nan() || s_in > s_out || s_out < line.lo || s_in > line.hi {
+        return None;
+    }
+    if s_in < line.lo {
+        return Some(Entry {
+            s: line.lo,
+            normal: -n,
+        });
+    }
+    let sk = if dz != 0.0 { dz.signum() } else { -nk.signum() };
+    let normal = match at {
+        _ if dz == 0.0 => -nk.signum() * k,
+        At::Cap0 => -sk * k,
+        At::Cap1 => sk * k,
+        At::Mantle => {
+            let x = m + s_in * n;
+            let u = x.dot(k) / dz;
+            let w = x - x.dot(k) * k - u * dh;
+            // ∇|w|² ∝ w − (w·dh/dz)·k, scaled by |dz| to stay finite.
+            (dz.abs() * w - sk * w.dot(dh) * k).normalize_or(-n)
+        }
+    };
+    Some(Entry { s: s_in, normal })
+}
+
+/// First entry of `line` into the puck swept along the straight move `c0 → c1` (axis `k`)
+/// by Newton's method on the convex distance to the swept disk (see the module docs); any
+/// puck, exact to 1e-12 mm.
+pub fn convex_translation_entry(
+    line: &Line,
+    puck: &Puck,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+) -> Option<Entry> {
+    let d = c1 - c0;
+    let f = |s: f64| {
+        let (dist, g, _) = segment_disk_min(puck, line.at(s) - c0, d, k);
+        (dist - puck.r, g)
+    };
+    first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
+}
+
+/// A toolpath move as the refinement sees it: tip and axis at both ends, cutter radii.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MoveGeometry {
+    /// Pose at `u = 0`.
+    pub a: Pose,
+    /// Pose at `u = 1`.
+    pub b: Pose,
+    /// The cutter's lower part.
+    pub puck: Puck,
+}
+
+impl MoveGeometry {
+    /// True when the axis does not change along the move.
+    pub fn is_translation(&self) -> bool {
+        self.a.axis == self.b.axis
+    }
+
+    /// Torus centre and axis at `u`.
+    pub fn centre_axis(&self, u: f64) -> (DVec3, DVec3) {
+        let p = crate::model::interpolate(&self.a, &self.b, u);
+        (p.tip + self.puck.r * p.axis, p.axis)
+    }
+
+    /// First entry of `line` into the puck at `u`.
+    pub fn entry_at(&self, line: &Line, u: f64) -> Option<Entry> {
+        let (c, k) = self.centre_axis(u);
+        if self.puck.a == 0.0 {
+            let (s_in, s_out) = sphere_interval(line.o, line.n, c, self.puck.r)?;
+            if s_out < line.lo || s_in > line.hi {
+                return None;
+            }
+            let s = s_in.max(line.lo);
+            let normal = if s_in < line.lo {
+                -line.n
+            } else {
+                ((line.at(s) - c) / self.puck.r).normalize_or(-line.n)
+            };
+            return Some(Entry { s, normal });
+        }
+        puck_entry(line, &self.puck, c, k)
+    }
+
+    /// First entry into the union of pucks for `u ∈ [u_lo, u_hi]` by golden-section search
+    /// over `u` of [`MoveGeometry::entry_at`] (misses count as `+∞`), starting bracket
+    /// `[u_lo, u_hi]`; exact where the entry is unimodal in `u` there.
+    pub fn entry_min_over(&self, line: &Line, u_lo: f64, u_hi: f64) -> Option<(Entry, f64)> {
+        const G: f64 = 0.618_033_988_749_894_9;
+        let val = |u: f64| self.entry_at(line, u);
+        let key = |e: &Option<Entry>| e.map_or(f64::INFINITY, |e| e.s);
+        let (mut lo, mut hi) = (u_lo, u_hi);
+        let mut best: Option<(Entry, f64)> = None;
+        let consider = |e: Option<Entry>, u: f64, best: &mut Option<(Entry, f64)>| {
+            if let Some(e) = e
+                && best.is_none_or(|(b, _)| e.s < b.s)
+            {
+                *best = Some((e, u));
+            }
+        };
+        consider(val(lo), lo, &mut best);
+        consider(val(hi), hi, &mut best);
+        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+        let (mut e1, mut e2) = (val(x1), val(x2));
+        for _ in 0..90 {
+            if hi - lo <= 1e-12 {
+                break;
+            }
+            if key(&e1) <= key(&e2) {
+                consider(e2, x2, &mut best);
+                hi = x2;
+                (x2, e2) = (x1, e1);
+                x1 = hi - G * (hi - lo);
+                e1 = val(x1);
+            } else {
+                consider(e1, x1, &mut best);
+                lo = x1;
+                (x1, e1) = (x2, e2);
+                x2 = lo + G * (hi - lo);
+                e2 = val(x2);
+            }
+        }
+        consider(e1, x1, &mut best);
+        consider(e2, x2, &mut best);
+        best
+    }
+
+    /// How deep `p` lies inside the puck swept along the move (mm, 0 outside): `r` minus its
+    /// distance to the swept disk, the largest over the move. Exact for a translation (a
+    /// convex minimisation); for a rotating move by golden-section search over `u`.
+    pub fn depth_at(&self, p: DVec3) -> f64 {
+        let r = self.puck.r;
+        if self.is_translation() {
+            let (c0, k) = self.centre_axis(0.0);
+            let (c1, _) = self.centre_axis(1.0);
+            let (d, _, _) = segment_disk_min(&self.puck, p - c0, c1 - c0, k);
+            return (r - d).max(0.0);
+        }
+        let dist = |u: f64| {
+            let (c, k) = self.centre_axis(u);
+            self.puck.disk_distance(p - c, k).0
+        };
+        const G: f64 = 0.618_033_988_749_894_9;
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        let mut best = dist(0.0).min(dist(1.0));
+        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+        let (mut f1, mut f2) = (dist(x1), dist(x2));
+        while hi - lo > 1e-12 {
+            best = best.min(f1).min(f2);
+            if f1 <= f2 {
+                hi = x2;
+                (x2, f2) = (x1, f1);
+                x1 = hi - G * (hi - lo);
+                f1 = dist(x1);
+            } else {
+                lo = x1;
+                (x1, f1) = (x2, f2);
+                x2 = lo + G * (hi - lo);
+                f2 = dist(x2);
+            }
+        }
+        (r - best.min(f1).min(f2)).max(0.0)
+    }
+
+    /// First entry of `line` into the puck swept along the whole move, when it is a
+    /// translation (exact, see the module docs).
+    pub fn translation_entry(&self, line: &Line) -> Option<Entry> {
+        let (c0, k) = self.centre_axis(0.0);
+        let (c1, _) = self.centre_axis(1.0);
+        translation_entry(line, &self.puck, c0, c1, k)
+    }
+}
+
+/// The body frame used to name inserts along a rotating move: `e1` at a reference pose
+/// carried by the minimal rotation between axes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyFrame {
+    /// Axis at the reference pose.
+    pub k_ref: DVec3,
+    /// `e1` at the reference pose (unit, ⟂ `k_ref`).
+    pub e1_ref: DVec3,
+}
+
+/// One evaluation of the continuous imprint surface.
+struct SurfacePoint {
+    m: DVec3,
+    w: DVec3,
+    /// `w·û` and `−w·k`: where `w` sits on the insert circle.
+    wu: f64,
+    wk: f64,
+}
+
+/// Which formula gives the imprint point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Regime {
+    /// Eq. 2 on the corner torus.
+    Torus,
+    /// Clamped to the bottom rim (`w = −k`).
+    Rim,
+    /// Clamped to the equator (`w = û`).
+    Side,
+}
+
+impl MoveGeometry {
+    fn surface(&self, frame: &BodyFrame, u: f64, psi: f64, regime: Regime) -> Option<SurfacePoint> {
+        let (a, r) = (self.puck.a, self.puck.r);
+        let kk = self.a.axis.lerp(self.b.axis, u);
+        let len = kk.length();
+        if len.is_nan() || len <= 1e-12 {
+            return None;
+        }
+        let k = kk / len;
+        let dk = self.b.axis - self.a.axis;
+        let kp = (dk - k * k.dot(dk)) / len;
+        let tip = self.a.tip.lerp(self.b.tip, u);
+        let tipp = self.b.tip - self.a.tip;
+        let e = minimal_rotation(frame.e1_ref, frame.k_ref, k);
+        let e1 = (e - e.dot(k) * k).try_normalize()?;
+        let e2 = k.cross(e1);
+        let (sp, cp) = psi.sin_cos();
+        let uh = cp * e1 + sp * e2;
+        let t = tip + r * k + a * uh;
+        let (w, wu, wk) = match regime {
+            Regime::Rim => (-k, 0.0, 1.0),
+            Regime::Side => (uh, 1.0, 0.0),
+            Regime::Torus => {
+                let v = tipp + r * kp - a * kp.dot(uh) * k;
+                let nrm = k.cross(uh);
+                let x = v.cross(nrm);
+                let xx = x.length_squared();
+                if xx.is_nan() || xx <= 1e-24 * v.length_squared() {
+                    return None;
+                }
+                let mut w = x / xx.sqrt();
+                let (mut wu, mut wk) = (w.dot(uh), -w.dot(k));
+                if wu + wk < 0.0 {
+                    w = -w;
+                    wu = -wu;
+                    wk = -wk;
+                }
+                (w, wu, wk)
+            }
+        };
+        Some(SurfacePoint {
+            m: t + r * w,
+            w,
+            wu,
+            wk,
+        })
+    }
+
+    /// Newton on `m(u, ψ) = o + s·n` in the given regime from `(u, ψ, s)`.
+    fn newton(
+        &self,
+        line: &Line,
+        frame: &BodyFrame,
+        regime: Regime,
+        mut x: [f64; 3],
+    ) -> Option<([f64; 3], SurfacePoint)> {
+        const H_U: f64 = 1e-7;
+        const H_PSI: f64 = 1e-7;
+        for _ in 0..30 {
+            let [u, psi, s] = x;
+            let p = self.surface(frame, u, psi, regime)?;
+            let res = p.m - line.at(s);
+            let err = res.length();
+            let du = {
+                let a = self.surface(frame, u + H_U, psi, regime)?;
+                let b = self.surface(frame, u - H_U, psi, regime)?;
+                (a.m - b.m) / (2.0 * H_U)
+            };
+            let dpsi = {
+                let a = self.surface(frame, u, psi + H_PSI, regime)?;
+                let b = self.surface(frame, u, psi - H_PSI, regime)?;
+                (a.m - b.m) / (2.0 * H_PSI)
+            };
+            let ds = -line.n;
+            let det = du.dot(dpsi.cross(ds));
+            if det.is_nan() || det.abs() <= 1e-300 {
+                return None;
+            }
+            // Cramer: J·δ = −res.
+            let rhs = -res;
+            let d0 = rhs.dot(dpsi.cross(ds)) / det;
+            let d1 = du.dot(rhs.cross(ds)) / det;
+            let d2 = du.dot(dpsi.cross(rhs)) / det;
+            let scale = (d0.abs() / 0.25)
+                .max(d1.abs() / 0.5)
+                .max(d2.abs() / 2.0)
+                .max(1.0);
+            x = [u + d0 / scale, psi + d1 / scale, s + d2 / scale];
+            if err <= 1e-12 && scale == 1.0 && d0.abs() < 1e-10 && d2.abs() < 1e-11 {
+                let p = self.surface(frame, x[0], x[1], regime)?;
+                return Some((x, p));
+            }
+            if !x.iter().all(|v| v.is_finite()) {
+                return None;
+            }
+        }
+        let p = self.surface(frame, x[0], x[1], regime)?;
+        ((p.m - line.at(x[2])).length() <= 1e-10).then_some((x, p))
+    }
+
+    /// Refines a crossing of the imprint surface of a rotating move: Newton on the
+    /// continuous imprint surface from the guess `(u, ψ, s)`, with the solution's `u`; `None`
+    /// if it does not converge to an entry point on the cutting quarter with `u ∈ [0, 1]`,
+    /// `s ∈ [lo, hi]`.
+    pub fn imprint_entry(
+        &self,
+        line: &Line,
+        frame: &BodyFrame,
+        guess: [f64; 3],
+    ) -> Option<(Entry, f64)> {
+        let valid = |x: &[f64; 3], p: &SurfacePoint| {
+            (0.0..=1.0).contains(&x[0])
+                && x[2] >= line.lo
+                && x[2] <= line.hi
+                && p.w.dot(line.n) < 0.0
+        };
+        let (x, p) = self.newton(line, frame, Regime::Torus, guess)?;
+        let torus_ok = p.wk >= -1e-12 && (p.wu >= -1e-12 || self.puck.a == 0.0);
+        if torus_ok {
+            return valid(&x, &p).then_some((
+                Entry {
+                    s: x[2],
+                    normal: p.w,
+                },
+                x[0],
+            ));
+        }
+        // Off the cutting quarter: the sweep clamps such points to the rim or the equator.
+        let regime = if p.wk < 0.0 {
+            Regime::Side
+        } else {
+            Regime::Rim
+        };
+        let (x, p) = self.newton(line, frame, regime, x)?;
+        let eq2 = self.surface(frame, x[0], x[1], Regime::Torus)?;
+        let consistent = match regime {
+            Regime::Side => eq2.wk < 0.0,
+            _ => eq2.wu < 0.0,
+        };
+        (consistent && valid(&x, &p)).then_some((
+            Entry {
+                s: x[2],
+                normal: p.w,
+            },
+            x[0],
+        ))
+    }
+}
+
+impl Puck {
+    /// The puck of a cutter.
+    pub fn of(cutter: &cam_core::Cutter) -> Puck {
+        Puck {
+            a: cutter.major_radius(),
+            r: cutter.corner_radius(),
+        }
+    }
+}

@@ -1,0 +1,863 @@
+//! The normal-vector deviation against swept-surface models: locate crossings on the
+//! piecewise-linear imprint surface ([`crate::locate`]), then, for the [`SurfaceModel::Exact`]
+//! surface, refine them onto the exact swept volume ([`crate::exact`]).
+//!
+//! # Why refine, and which crossings
+//! The imprint surface joins exact points by chords, so it lies inside the swept volume by
+//! up to the chord sag (`r(1 − cos π/Q)` across a ball's groove, 9.25 µm at Q = 40; more for
+//! a bull's long chords along its rim). A vector meets it that much (divided by the cosine
+//! of its incidence) beyond the true surface, and near a sheet's curved edge it can enter
+//! the true sheet and miss the chords: strip triangles are located with a margin of twice
+//! the sag ([`edge_margin`]). Refinement solves for the true entry near each crossing. Where
+//! two sheets cross (the crest between passes) the lowest triangle may not belong to the
+//! lowest true sheet, so every crossing `c` with `s_c ≤ s_min + δ_c` is a candidate,
+//! `δ_c = 4·sag / max(|facing_c|, 0.2)` with `sag` the tool's chord sag (the largest
+//! window, [`window`], for a step ending at a pose that joins two moves, where the true
+//! surface holds the tool at that pose); candidates are refined lowest first, skipping those
+//! whose window cannot reach below the best entry found, and the lowest entry wins.
+//!
+//! # What a refined value means
+//! Every refined entry is a point where the vector enters the cutter at some pose of the
+//! path, so it is never below the true first entry; for the move searched it is exact (see
+//! [`crate::exact`]). Where no crossing of a vector can be refined, its lowest crossing on the
+//! imprint surface is kept and counted in [`MeasureStats::kept_linear`].
+
+use cam_core::{DVec3, Toolpath};
+use rayon::prelude::*;
+
+use crate::deviation::{Deviation, DeviationConfig, DeviationError, Facing};
+use crate::exact::{BodyFrame, Entry, Line, MoveGeometry, Puck};
+use crate::locate::{Crossing, PatchBvh, Vector, locate};
+use crate::model::{Piece, SweepModel, unkey};
+use crate::refine::RefinedMesh;
+
+/// Which swept surface the deviations are measured against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum SurfaceModel {
+    /// The paper's piecewise-linear imprint surface (triangles between imprint points).
+    Linear,
+    /// Crossings refined onto the exact swept volume (default).
+    Exact,
+}
+
+/// Counts of what the measurement did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub struct MeasureStats {
+    /// Vectors with at least one crossing.
+    pub crossed: usize,
+    /// Crossings refined (after removing duplicates of one move or piece).
+    pub refinements: usize,
+    /// Vectors whose value is a refined entry.
+    pub refined: usize,
+    /// Vectors whose crossings could not be refined: their linear value is kept.
+    pub kept_linear: usize,
+    /// Vectors with more qualifying crossings than kept.
+    pub overflow: usize,
+}
+
+/// The measurement.
+#[derive(Debug, Clone)]
+pub struct Measurement {
+    /// Per refined vertex, in vertex order.
+    pub deviations: Vec<Deviation>,
+    /// Per vertex: the outward normal of the swept surface at the answer dotted with the
+    /// vector (`< 0`), or 0 where nothing was crossed.
+    pub facing: Vec<f64>,
+    /// Per vertex: the lowest crossing of the piecewise-linear surface (mm).
+    pub linear_mm: Vec<Option<f64>>,
+    /// Per vertex: what gave the answer (for the depth at creases).
+    pub source: Vec<Option<Source>>,
+    /// What was done.
+    pub stats: MeasureStats,
+}
+
+/// What a measured value is the entry into.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Source {
+    /// The volume swept along toolpath move `mv` (index into `Toolpath::moves`).
+    Move(u32),
+    /// The tool at one pose: frame `frame` of model `model`.
+    Pose {
+        /// Index of the model in the slice measured.
+        model: u8,
+        /// Frame index in that model.
+        frame: u32,
+    },
+}
+
+/// How deep (mm) `p` lies inside the volume of `source` (a move's swept volume or the tool
+/// at a pose): `r` minus the distance to the swept disk ([`MoveGeometry::depth_at`]); 0
+/// when outside.
+pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source, p: DVec3) -> f64 {
+    let Some(first) = models.first() else {
+        return 0.0;
+    };
+    let puck = Puck::of(first.cutter());
+    let g = match source {
+        Source::Move(mv) => {
+            let i = mv as usize;
+            if i == 0 || i >= toolpath.moves.len() {
+                return 0.0;
+            }
+            MoveGeometry {
+                a: toolpath.moves[i - 1].pose,
+                b: toolpath.moves[i].pose,
+                puck,
+            }
+        }
+        Source::Pose { model, frame } => {
+            let Some(f) = models
+                .get(model as usize)
+                .and_then(|m| m.frames.get(frame as usize))
+            else {
+                return 0.0;
+            };
+            let pose = cam_core::Pose {
+                tip: f.tip(puck.r),
+                axis: f.axis,
+            };
+            MoveGeometry {
+                a: pose,
+                b: pose,
+                puck,
+            }
+        }
+    };
+    g.depth_at(p)
+}
+
+const SAFETY: f64 = 4.0;
+const MIN_FACING: f64 = 0.5;
+
+/// Largest chord sag (mm) of the imprint surface's caps, also a scale for its strips: the
+/// rim's chord over one sector and the corner's over one ring.
+fn tool_sag(model: &SweepModel) -> f64 {
+    let c = model.cutter();
+    let (a, r) = (c.major_radius(), c.corner_radius());
+    let q = model.inserts() as f64;
+    let rings = model.rings() as f64;
+    ((a + r) * (1.0 - (std::f64::consts::PI / q).cos()))
+        .max(r * (1.0 - (std::f64::consts::FRAC_PI_4 / rings).cos()))
+}
+
+/// How far outside a strip triangle (mm) a line still locates it on the exact surface:
+/// twice the tool's chord sag.
+pub fn edge_margin(models: &[&SweepModel]) -> f64 {
+    models.iter().map(|m| 2.0 * tool_sag(m)).fold(0.0, f64::max)
+}
+
+/// The search window above the lowest crossing (mm): the largest `δ_c` allowed.
+pub fn window(models: &[&SweepModel]) -> f64 {
+    models
+        .iter()
+        .map(|m| SAFETY * tool_sag(m) / MIN_FACING)
+        .fold(1e-6, f64::max)
+}
+
+/// The strip slot's corners as (pose 0 or 1, point index), in the order of the unoriented
+/// triangle.
+fn slot_corners(slot: usize) -> [(usize, usize); 3] {
+    let j = slot / 2;
+    if slot.is_multiple_of(2) {
+        [(0, j), (0, j + 1), (1, j + 1)]
+    } else {
+        [(0, j), (1, j + 1), (1, j)]
+    }
+}
+
+/// The corners of a strip triangle in the oriented triangle's order.
+fn oriented_corners(model: &SweepModel, piece: usize, slot: usize) -> Option<[(usize, usize); 3]> {
+    let Piece::Strip { frame, .. } = model.pieces[piece] else {
+        return None;
+    };
+    let t = model.slot_triangle(piece, slot)?;
+    let mut c = slot_corners(slot);
+    let p1 = model.curve(frame + c[1].0 as u32)[c[1].1];
+    if t.v[1] != p1 {
+        c.swap(1, 2);
+    }
+    Some(c)
+}
+
+/// The refinement context: the toolpath's moves, the cutter's puck, the line bounds.
+struct Refiner<'a> {
+    models: &'a [&'a SweepModel],
+    toolpath: &'a Toolpath,
+    puck: Puck,
+}
+
+impl Refiner<'_> {
+    fn geometry(&self, mv: u32) -> Option<MoveGeometry> {
+        let i = mv as usize;
+        (i >= 1 && i < self.toolpath.moves.len()).then(|| MoveGeometry {
+            a: self.toolpath.moves[i - 1].pose,
+            b: self.toolpath.moves[i].pose,
+            puck: self.puck,
+        })
+    }
+
+    /// Refines one crossing: the entry and the move (or, for a cap, the move it is attributed
+    /// to) it lies on; `None` if it cannot be refined.
+    fn refine(&self, line: &Line, c: &Crossing) -> Option<(Entry, u32)> {
+        let model = self.models[c.model as usize];
+        let (piece, slot) = unkey(c.key);
+        match model.pieces[piece] {
+            Piece::Gap { .. } => None,
+            Piece::Cap { frame, .. } => {
+                let fr = &model.frames[frame as usize];
+                let g = MoveGeometry {
+                    a: cam_core::Pose {
+                        tip: fr.tip(self.puck.r),
+                        axis: fr.axis,
+                    },
+                    b: cam_core::Pose {
+                        tip: fr.tip(self.puck.r),
+                        axis: fr.axis,
+                    },
+                    puck: self.puck,
+                };
+                g.entry_at(line, 0.0)
+                    .map(|e| (e, model.pieces[piece].source_move()))
+            }
+            Piece::Strip { frame, step } => {
+                let g = self.geometry(step.mv)?;
+                if g.is_translation() {
+                    return g.translation_entry(line).map(|e| (e, step.mv));
+                }
+                self.refine_rotating(line, c, model, piece, slot, frame, step, &g)
+            }
+        }
+    }
+
+    /// The geometry of feed move `mv`, if it is one.
+    fn feed_geometry(&self, mv: u32) -> Option<MoveGeometry> {
+        let m = self.toolpath.moves.get(mv as usize)?;
+        (m.kind != cam_core::MoveKind::Rapid)
+            .then(|| self.geometry(mv))
+            .flatten()
+    }
+
+    /// Refines a crossing of a rotating move's strip: Newton on the move's continuous imprint
+    /// surface (a ball: the entry minimised over the pose parameter), else the entry
+    /// minimised over the step and its neighbours; where the step ends at a pose joining
+    /// another move, also the tool at that pose and the other move's surface near it (the
+    /// true surface there may be the tool at the joint, or the other move's sheet).
+    #[allow(clippy::too_many_arguments)]
+    fn refine_rotating(
+        &self,
+        line: &Line,
+        c: &Crossing,
+        model: &SweepModel,
+        piece: usize,
+        slot: usize,
+        frame: u32,
+        step: crate::model::StepParam,
+        g: &MoveGeometry,
+    ) -> Option<(Entry, u32)> {
+        let mut best: Option<(Entry, u32)> = None;
+        let mut take = |e: Option<Entry>, mv: u32| {
+            if let Some(e) = e
+                && best.is_none_or(|(b, _)| e.s < b.s)
+            {
+                best = Some((e, mv));
+            }
+        };
+        let (u0, u1) = (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
+        let du = u1 - u0;
+        let (lo, hi) = ((u0 - du).max(0.0), (u1 + du).min(1.0));
+        // Guess: barycentric interpolation of the corners' (u, ψ), ψ in the body frame.
+        let guess = (self.puck.a > 0.0)
+            .then(|| {
+                let corners = oriented_corners(model, piece, slot)?;
+                let params = corners.map(|(p, j)| {
+                    let f = &model.frames[frame as usize + p];
+                    let y = model.curve(frame + p as u32)[j] - f.centre;
+                    let psi = y.dot(f.e2).atan2(y.dot(f.e1));
+                    (if p == 0 { step.u_from } else { step.u_to }, psi)
+                });
+                let (b1, b2) = c.bary;
+                let b0 = 1.0 - b1 - b2;
+                let base = params[0].1;
+                let unwrap = |x: f64| {
+                    base + (x - base + std::f64::consts::PI).rem_euclid(2.0 * std::f64::consts::PI)
+                        - std::f64::consts::PI
+                };
+                let u = b0 * params[0].0 + b1 * params[1].0 + b2 * params[2].0;
+                let psi = b0 * base + b1 * unwrap(params[1].1) + b2 * unwrap(params[2].1);
+                Some((u, psi))
+            })
+            .flatten();
+        let body_at = |f: usize| {
+            let fr = &model.frames[f];
+            BodyFrame {
+                k_ref: fr.axis,
+                e1_ref: fr.e1,
+            }
+        };
+        // Body frame at the step's pose with parameter `u`: frame `frame` at u_from, the next
+        // at u_to.
+        let frame_at = |u: f64| {
+            if u == step.u_from {
+                frame as usize
+            } else {
+                frame as usize + 1
+            }
+        };
+        let own = guess
+            .and_then(|(u, psi)| g.imprint_entry(line, &body_at(frame as usize), [u, psi, c.s]))
+            .or_else(|| g.entry_min_over(line, lo, hi));
+        // Near a move end (the step's own or the solution's), the neighbouring move and the
+        // tool at the joint.
+        let u_sol = own.map_or(0.5 * (u0 + u1), |(_, u)| u);
+        take(own.map(|(e, _)| e), step.mv);
+        let reach = 2.0 * du.max(1e-9);
+        for (touch, at, adj, u_adj) in [
+            (
+                u0 == 0.0 || u_sol <= reach,
+                0.0,
+                step.mv.checked_sub(1),
+                1.0,
+            ),
+            (
+                u1 == 1.0 || u_sol >= 1.0 - reach,
+                1.0,
+                Some(step.mv + 1),
+                0.0,
+            ),
+        ] {
+            if !touch {
+                continue;
+            }
+            take(g.entry_at(line, at), step.mv);
+            let Some((m, ga)) = adj.and_then(|m| Some((m, self.feed_geometry(m)?))) else {
+                continue;
+            };
+            if ga.is_translation() {
+                take(ga.translation_entry(line), m);
+                continue;
+            }
+            // The joint's frame: the step's pose at `at` if it has one, else carried there.
+            let body = if (at == step.u_from) || (at == step.u_to) {
+                body_at(frame_at(at))
+            } else {
+                let (_, k) = g.centre_axis(at);
+                let b0 = body_at(frame as usize);
+                BodyFrame {
+                    k_ref: k,
+                    e1_ref: crate::imprint::minimal_rotation(b0.e1_ref, b0.k_ref, k),
+                }
+            };
+            let near = if u_adj == 1.0 { (0.5, 1.0) } else { (0.0, 0.5) };
+            let adj_entry = guess
+                .and_then(|(_, psi)| ga.imprint_entry(line, &body, [u_adj, psi, c.s]))
+                .or_else(|| ga.entry_min_over(line, near.0, near.1));
+            take(adj_entry.map(|(e, _)| e), m);
+        }
+        best
+    }
+
+    /// A key naming what a refinement of `c` computes, to refine it once per vector.
+    fn identity(&self, c: &Crossing) -> (u8, u64) {
+        let model = self.models[c.model as usize];
+        let (piece, _) = unkey(c.key);
+        match model.pieces[piece] {
+            Piece::Strip { step, .. } => match self.geometry(step.mv) {
+                // The whole move's volume: the same for every strip of the move, either sweep.
+                Some(g) if g.is_translation() => (u8::MAX, step.mv as u64),
+                _ => (c.model, piece as u64),
+            },
+            Piece::Cap { .. } | Piece::Gap { .. } => (c.model, piece as u64),
+        }
+    }
+}
+
+/// The pieces searched exactly in [`SurfaceModel::Exact`] rather than located by triangles:
+/// caps (the tool at one pose) and gaps (a step whose strip is missing because the imprinted
+/// half flips). A hierarchy of bounds: the sphere of radius `R` about a cap's torus centre
+/// holds its whole puck; the capsule of radius `R` about a gap's centre segment holds its
+/// step's swept volume.
+struct Extras {
+    /// `(model, piece, centre at the first pose, centre at the second)`, in tree order.
+    items: Vec<(u8, u32, DVec3, DVec3)>,
+    /// Nodes: box and, for a leaf, the item range; inner nodes point at two children.
+    nodes: Vec<(DVec3, DVec3, u32, u32)>,
+    radius: f64,
+}
+
+impl Extras {
+    fn new(models: &[&SweepModel]) -> Extras {
+        let mut items = Vec::new();
+        for (mi, m) in models.iter().enumerate() {
+            for (pi, p) in m.pieces.iter().enumerate() {
+                match *p {
+                    Piece::Cap { frame, .. } => {
+                        let c = m.frames[frame as usize].centre;
+                        items.push((mi as u8, pi as u32, c, c));
+                    }
+                    Piece::Gap { frame, .. } => {
+                        let (a, b) = (
+                            m.frames[frame as usize].centre,
+                            m.frames[frame as usize + 1].centre,
+                        );
+                        items.push((mi as u8, pi as u32, a, b));
+                    }
+                    Piece::Strip { .. } => {}
+                }
+            }
+        }
+        // A step rotating the axis moves its centre along a slightly curved path: pad.
+        let radius = models
+            .first()
+            .map_or(0.0, |m| m.cutter().radius() * (1.0 + 1e-9) + 1e-9);
+        let mids: Vec<DVec3> = items.iter().map(|c| 0.5 * (c.2 + c.3)).collect();
+        let codes = crate::locate::morton_codes(&mids);
+        let mut order: Vec<(u64, usize)> =
+            codes.into_iter().enumerate().map(|(i, c)| (c, i)).collect();
+        order.sort_unstable();
+        let items: Vec<_> = order.iter().map(|&(_, i)| items[i]).collect();
+        let mut e = Extras {
+            items,
+            nodes: Vec::new(),
+            radius,
+        };
+        if !e.items.is_empty() {
+            e.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+            e.build(0, 0, e.items.len());
+        }
+        e
+    }
+
+    fn build(&mut self, ni: usize, lo: usize, hi: usize) {
+        let r = DVec3::splat(self.radius);
+        if hi - lo <= 2 {
+            let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+            for c in &self.items[lo..hi] {
+                a = a.min(c.2.min(c.3) - r);
+                b = b.max(c.2.max(c.3) + r);
+            }
+            self.nodes[ni] = (a, b, lo as u32, (hi - lo) as u32);
+            return;
+        }
+        let left = self.nodes.len();
+        self.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+        self.nodes.push((DVec3::ZERO, DVec3::ZERO, 0, 0));
+        let mid = (lo + hi) / 2;
+        self.build(left, lo, mid);
+        self.build(left + 1, mid, hi);
+        let (l, rr) = (self.nodes[left], self.nodes[left + 1]);
+        self.nodes[ni] = (l.0.min(rr.0), l.1.max(rr.1), left as u32, 0);
+    }
+
+    /// Calls `f` for every item whose bound the segment `lo..hi(current)` of `line` meets;
+    /// `f` returns the new upper end of the segment.
+    fn visit(&self, line: &Line, mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        let mut stack = vec![0u32];
+        while let Some(ni) = stack.pop() {
+            let (a, b, first, count) = self.nodes[ni as usize];
+            if !segment_box(line.o, inv, a, b, line.lo, hi) {
+                continue;
+            }
+            if count == 0 {
+                stack.push(first + 1);
+                stack.push(first);
+                continue;
+            }
+            for ci in first as usize..(first + count) as usize {
+                let (_, _, c0, c1) = self.items[ci];
+                let seg = Line { hi, ..*line };
+                if crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none() {
+                    continue;
+                }
+                hi = f(ci, hi);
+            }
+        }
+    }
+}
+
+/// Whether the segment `o + s·n`, `s ∈ [t0, t1]`, meets the box (boundary included).
+fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
+    let (mut lo, mut hi) = (t0, t1);
+    for a in 0..3 {
+        if inv[a].is_infinite() {
+            if o[a] < min[a] || o[a] > max[a] {
+                return false;
+            }
+            continue;
+        }
+        let ta = (min[a] - o[a]) * inv[a];
+        let tb = (max[a] - o[a]) * inv[a];
+        let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+        lo = lo.max(ta);
+        hi = hi.min(tb);
+        if lo > hi {
+            return false;
+        }
+    }
+    true
+}
+
+/// How crossings are located: the fast tile search, or the brute-force reference (tests).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Locator {
+    /// [`crate::locate::locate`].
+    Fast,
+    /// [`crate::locate::locate_reference`] and every cap tested.
+    Reference,
+}
+
+/// Measures the signed deviation of every vertex of `refined` against the swept surfaces
+/// `models` of `toolpath`. Parallel; the result does not depend on the number of threads.
+///
+/// # Errors
+/// [`DeviationError::BadLength`] for negative or non-finite vector lengths.
+pub fn measure(
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+) -> Result<Measurement, DeviationError> {
+    measure_with(refined, models, toolpath, cfg, surface, Locator::Fast)
+}
+
+/// [`measure`] with a choice of locator: [`Locator::Reference`] must give the same result
+/// (it is the straightforward method the fast one is tested against).
+///
+/// # Errors
+/// As [`measure`].
+pub fn measure_with(
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+    locator: Locator,
+) -> Result<Measurement, DeviationError> {
+    let ok = |x: f64| x.is_finite() && x >= 0.0;
+    if !ok(cfg.inside_mm) || !ok(cfg.outside_mm) {
+        return Err(DeviationError::BadLength {
+            inside_mm: cfg.inside_mm,
+            outside_mm: cfg.outside_mm,
+        });
+    }
+    let vectors: Vec<Vector> = refined
+        .positions
+        .iter()
+        .zip(&refined.normals)
+        .map(|(&o, &n)| Vector {
+            o,
+            n,
+            lo: -cfg.inside_mm,
+            hi: cfg.outside_mm,
+        })
+        .collect();
+    Ok(measure_vectors(
+        &vectors, models, toolpath, cfg.facing, surface, locator,
+    ))
+}
+
+/// First entries of the lines `(origin, unit direction)` into the swept volume, for
+/// `s ∈ [0, max_mm]` along each: the method of [`measure`] on arbitrary lines (for
+/// validation against [`crate::envelope`]). `None` where nothing is entered.
+pub fn first_entries(
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    lines: &[(DVec3, DVec3)],
+    max_mm: f64,
+    surface: SurfaceModel,
+) -> Vec<Option<f64>> {
+    let vectors: Vec<Vector> = lines
+        .iter()
+        .map(|&(o, n)| Vector {
+            o,
+            n,
+            lo: 0.0,
+            hi: max_mm,
+        })
+        .collect();
+    measure_vectors(
+        &vectors,
+        models,
+        toolpath,
+        Facing::AgainstVector,
+        surface,
+        Locator::Fast,
+    )
+    .deviations
+    .iter()
+    .map(|d| d.signed_mm)
+    .collect()
+}
+
+/// The measurement for explicit vectors.
+fn measure_vectors(
+    vectors: &[Vector],
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    facing: Facing,
+    surface: SurfaceModel,
+    locator: Locator,
+) -> Measurement {
+    let exact = surface == SurfaceModel::Exact;
+    let vectors = vectors.to_vec();
+    let delta = window(models);
+    // Exact: caps are tested exactly below, the triangles locate strips only, and a line
+    // passing just outside a triangle counts: the true sheet bulges past its chords by up to
+    // the sag, so near a sheet's curved edge a line can enter it and miss its triangles.
+    let margin = if exact { edge_margin(models) } else { 0.0 };
+    let found = match locator {
+        Locator::Fast => {
+            let bvhs: Vec<PatchBvh> = models
+                .iter()
+                .map(|m| PatchBvh::new(m, !exact, margin))
+                .collect();
+            let pairs: Vec<(&SweepModel, &PatchBvh)> = models.iter().copied().zip(&bvhs).collect();
+            locate(&pairs, &vectors, delta, margin)
+        }
+        Locator::Reference => {
+            crate::locate::locate_reference(models, &vectors, delta, margin, !exact)
+        }
+    };
+    let puck = models
+        .first()
+        .map_or(Puck { a: 0.0, r: 0.0 }, |m| Puck::of(m.cutter()));
+    let rf = Refiner {
+        models,
+        toolpath,
+        puck,
+    };
+    let extras = exact.then(|| Extras::new(models));
+    let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
+    let move_of = |c: &Crossing| {
+        let (piece, _) = unkey(c.key);
+        models[c.model as usize].pieces[piece].source_move()
+    };
+    type PerVector = (Deviation, f64, Option<f64>, Option<Source>, [usize; 5]);
+    let per: Vec<PerVector> = vectors
+        .par_iter()
+        .zip(found.par_iter())
+        .map(|(v, f)| {
+            let mut stats = [0usize; 5];
+            let dev = |s: Option<f64>, mv: Option<u32>| Deviation {
+                position: v.o,
+                normal: v.n,
+                signed_mm: s,
+                source_move: mv,
+            };
+            stats[4] = usize::from(f.overflow);
+            let low = f.crossings.first();
+            let linear = low.map(|l| (l.s, move_of(l), l.facing));
+            let source_of = |c: &Crossing| {
+                let m = models[c.model as usize];
+                match m.pieces[unkey(c.key).0] {
+                    Piece::Strip { step, .. } | Piece::Gap { step, .. } => Source::Move(step.mv),
+                    Piece::Cap { frame, .. } => Source::Pose {
+                        model: c.model,
+                        frame,
+                    },
+                }
+            };
+            let low_src = low.map(source_of);
+            if !exact {
+                stats[0] = usize::from(low.is_some());
+                return match linear {
+                    Some((s, mv, fc)) => (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats),
+                    None => (dev(None, None), 0.0, None, None, stats),
+                };
+            }
+            let line = Line {
+                o: v.o,
+                n: v.n,
+                lo: v.lo,
+                hi: v.hi,
+            };
+            // Best refined entry: (entry, move, order key, source).
+            type Best = Option<(Entry, u32, (u8, u64), Source)>;
+            let mut best: Best = None;
+            let better = |e: Entry, mv: u32, k: (u8, u64), src: Source, best: &mut Best| {
+                if facing_ok(e.normal.dot(v.n))
+                    && best.is_none_or(|(b, _, bk, _)| e.s < b.s || (e.s == b.s && k < bk))
+                {
+                    *best = Some((e, mv, k, src));
+                }
+            };
+            let mut done: Vec<(u8, u64)> = Vec::new();
+            if let Some(low) = low {
+                // Each crossing's true surface lies at most its window below it. In order of
+                // the crossings (lowest first): none beyond the best entry found plus the
+                // largest window can win; one whose own window does not reach below the best
+                // entry, or below the lowest crossing, cannot either.
+                for c in &f.crossings {
+                    if best.is_some_and(|b| c.s - delta > b.0.s) {
+                        break;
+                    }
+                    let id = rf.identity(c);
+                    if done.contains(&id) {
+                        continue;
+                    }
+                    let (piece, _) = unkey(c.key);
+                    let m = models[c.model as usize];
+                    // Where the path turns at one of the step's poses the true surface holds
+                    // the tool there (the fan between the imprint curves of the two
+                    // directions), which the strips can miss by up to R(1 − cos(turn/2)).
+                    let fan = match m.pieces[piece] {
+                        Piece::Strip { frame, .. } => {
+                            let t = m.turn[frame as usize].max(m.turn[frame as usize + 1]);
+                            m.cutter().radius() * (1.0 - (0.5 * t).cos())
+                        }
+                        _ => 0.0,
+                    };
+                    let sag = f64::from(m.sag[piece]);
+                    let d = ((SAFETY * sag + fan) / c.facing.abs().max(MIN_FACING)).min(delta);
+                    // A candidate whose surface cannot lie below the best entry (ties
+                    // included: they would not change the answer) is not refined.
+                    if c.s > low.s + d || best.is_some_and(|b| c.s - d >= b.0.s) {
+                        continue;
+                    }
+                    done.push(id);
+                    stats[1] += 1;
+                    if let Some((e, mv)) = rf.refine(&line, c) {
+                        let src = match source_of(c) {
+                            Source::Move(_) => Source::Move(mv),
+                            p => p,
+                        };
+                        better(e, mv, (c.model, c.key), src, &mut best);
+                    }
+                    // A translation's neighbours at the step's ends: near a joint the other
+                    // move's volume may be the lower one.
+                    if let Piece::Strip { step, .. } = m.pieces[piece]
+                        && id.0 == u8::MAX
+                    {
+                        let ends = [
+                            (step.u_from.min(step.u_to) == 0.0, step.mv.checked_sub(1)),
+                            (step.u_from.max(step.u_to) == 1.0, Some(step.mv + 1)),
+                        ];
+                        for (touch, adj) in ends {
+                            let Some(am) = adj.filter(|_| touch) else {
+                                continue;
+                            };
+                            let Some(ga) = rf.feed_geometry(am).filter(|g| g.is_translation())
+                            else {
+                                continue;
+                            };
+                            let aid = (u8::MAX, am as u64);
+                            if done.contains(&aid) {
+                                continue;
+                            }
+                            done.push(aid);
+                            stats[1] += 1;
+                            if let Some(e) = ga.translation_entry(&line) {
+                                better(e, am, aid, Source::Move(am), &mut best);
+                            }
+                        }
+                    }
+                }
+            }
+            if let Some(extras) = &extras {
+                let hi = best.map_or(v.hi, |b| b.0.s);
+                extras.visit(&line, hi, |ci, hi| {
+                    let (mi, pi, c, _) = extras.items[ci];
+                    let model = models[mi as usize];
+                    let seg = Line { hi, ..line };
+                    match model.pieces[pi as usize] {
+                        Piece::Cap { frame, mv } => {
+                            let k = model.frames[frame as usize].axis;
+                            let pose = cam_core::Pose {
+                                tip: c - puck.r * k,
+                                axis: k,
+                            };
+                            let g = MoveGeometry {
+                                a: pose,
+                                b: pose,
+                                puck,
+                            };
+                            stats[1] += 1;
+                            if let Some(e) = g.entry_at(&seg, 0.0) {
+                                let src = Source::Pose { model: mi, frame };
+                                better(e, mv, (mi, (pi as u64) << 32), src, &mut best);
+                            }
+                        }
+                        Piece::Gap { step, .. } => {
+                            let Some(g) = rf.feed_geometry(step.mv) else {
+                                return hi;
+                            };
+                            let id = if g.is_translation() {
+                                (u8::MAX, step.mv as u64)
+                            } else {
+                                (mi, pi as u64)
+                            };
+                            if done.contains(&id) {
+                                return hi;
+                            }
+                            done.push(id);
+                            stats[1] += 1;
+                            let e = if g.is_translation() {
+                                g.translation_entry(&seg)
+                            } else {
+                                let (u0, u1) =
+                                    (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
+                                let du = u1 - u0;
+                                g.entry_min_over(&seg, (u0 - du).max(0.0), (u1 + du).min(1.0))
+                                    .map(|(e, _)| e)
+                            };
+                            if let Some(e) = e {
+                                let k = (id.0, ((pi as u64) << 32) | (id.1 & 0xffff_ffff));
+                                better(e, step.mv, k, Source::Move(step.mv), &mut best);
+                            }
+                        }
+                        Piece::Strip { .. } => {}
+                    }
+                    best.map_or(hi, |b| b.0.s.min(hi))
+                });
+            }
+            match (best, linear) {
+                (Some((e, mv, _, src)), _) => {
+                    stats[0] = 1;
+                    stats[2] = 1;
+                    let lin = linear.map(|l| l.0);
+                    (
+                        dev(Some(e.s), Some(mv)),
+                        e.normal.dot(v.n),
+                        lin,
+                        Some(src),
+                        stats,
+                    )
+                }
+                (None, Some((s, mv, fc))) => {
+                    // Crossings located but none refined: keep the linear value.
+                    stats[0] = 1;
+                    stats[3] = 1;
+                    (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats)
+                }
+                (None, None) => (dev(None, None), 0.0, None, None, stats),
+            }
+        })
+        .collect();
+    let mut stats = MeasureStats::default();
+    let mut deviations = Vec::with_capacity(per.len());
+    let mut facings = Vec::with_capacity(per.len());
+    let mut linear_mm = Vec::with_capacity(per.len());
+    let mut source = Vec::with_capacity(per.len());
+    for (d, fc, l, src, s) in per {
+        deviations.push(d);
+        facings.push(fc);
+        linear_mm.push(l);
+        source.push(src);
+        stats.crossed += s[0];
+        stats.refinements += s[1];
+        stats.refined += s[2];
+        stats.kept_linear += s[3];
+        stats.overflow += s[4];
+    }
+    Measurement {
+        deviations,
+        facing: facings,
+        linear_mm,
+        source,
+        stats,
+    }
+}

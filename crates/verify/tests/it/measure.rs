@@ -1,0 +1,228 @@
+//! The measurement against swept-surface models: the fast locator (tiles over a patch
+//! hierarchy) against the straightforward reference (every triangle in one BVH, every cap
+//! tested), thread independence, and the exact surface against the independent z-map.
+
+use cam_core::{Cutter, DVec3, Mesh, Move, MoveKind, Pose, Toolpath, Units};
+use cam_verify::deviation::DeviationConfig;
+use cam_verify::measure::{Locator, Measurement, SurfaceModel, measure_with};
+use cam_verify::model::SweepModel;
+use cam_verify::refine::{self, RefineConfig, RefinedMesh};
+use cam_verify::sweep::SweepConfig;
+use cam_verify::testpaths::{PassSpec, TestSurface, normal_lines, pass};
+use cam_verify::zmap::{self, ZmapConfig, ZmapGrid};
+
+/// The dome fixture: a hemisphere of radius 20 on a 60 × 60 × 5 plate, top at z = 0.
+fn dome() -> Mesh {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/parts");
+    Mesh::load(root.join("dome.obj"), Units::Mm).expect("dome fixture")
+}
+
+/// Tip height of a ball of radius `r` dropped onto the dome at (x, y): the larger of resting
+/// on the plate (0) and on the sphere (its centre on the sphere of radius 20 + r).
+fn ball_tip_on_dome(x: f64, y: f64, r: f64) -> f64 {
+    let d2 = x * x + y * y;
+    let rr = 20.0 + r;
+    if d2 < rr * rr {
+        ((rr * rr - d2).sqrt() - r).max(0.0)
+    } else {
+        0.0
+    }
+}
+
+/// A 3-axis zig-zag of a ball over the dome: passes along X every `step_y`, tips every 0.5 mm
+/// (each exactly on the dome's exact drop surface), a rapid in and out.
+fn dome_zigzag(r: f64, x: (f64, f64), y: (f64, f64), step_y: f64) -> Toolpath {
+    let mv = |kind, p: DVec3| Move {
+        kind,
+        pose: Pose::vertical(p),
+        feed_mm_per_min: Some(1000.0),
+        line: None,
+        pass: None,
+    };
+    let mut moves = Vec::new();
+    let nx = ((x.1 - x.0) / 0.5).round() as usize;
+    let ny = ((y.1 - y.0) / step_y).round() as usize;
+    for j in 0..=ny {
+        let yy = y.0 + j as f64 * step_y;
+        for i in 0..=nx {
+            let ii = if j % 2 == 0 { i } else { nx - i };
+            let xx = x.0 + ii as f64 * 0.5;
+            let p = DVec3::new(xx, yy, ball_tip_on_dome(xx, yy, r));
+            let kind = if moves.is_empty() {
+                MoveKind::Rapid
+            } else {
+                MoveKind::Cut
+            };
+            moves.push(mv(kind, p));
+        }
+    }
+    Toolpath { moves }
+}
+
+fn refined_dome(e: f64, cutter: &Cutter) -> RefinedMesh {
+    let mut rc = RefineConfig::for_cutter(cutter, e);
+    rc.crease_angle_deg = 180.0;
+    refine::refine(&dome(), &rc).expect("refine")
+}
+
+fn assert_same(a: &Measurement, b: &Measurement, what: &str) {
+    assert_eq!(a.deviations.len(), b.deviations.len());
+    let mut differ = 0;
+    for (i, (x, y)) in a.deviations.iter().zip(&b.deviations).enumerate() {
+        if x != y || a.facing[i] != b.facing[i] || a.source[i] != b.source[i] {
+            differ += 1;
+            if differ < 5 {
+                eprintln!("{what}: vertex {i}: {x:?} vs {y:?}");
+            }
+        }
+    }
+    assert_eq!(differ, 0, "{what}: {differ} vertices differ");
+    assert_eq!(a.stats, b.stats, "{what}");
+}
+
+/// The fast locator finds exactly the crossings the reference finds (every triangle of the
+/// swept surface in one BVH, every crossing collected, then selected; every cap tested), so
+/// the measured deviations are bit-identical, on the linear and on the exact surface: a
+/// 3-axis ball zig-zag over the dome (caps at the pass ends and the plate–dome corner) and a
+/// 5-axis bull pass over the twisted blade with its back-gouge sweep.
+#[test]
+fn fast_locator_equals_reference() {
+    let ball = Cutter::ball(6.0).unwrap();
+    let tp = dome_zigzag(3.0, (-12.0, 12.0), (-6.0, 6.0), 1.2);
+    let r = refined_dome(0.05, &ball);
+    let fwd = SweepModel::new(&tp, &ball, &SweepConfig::default());
+    let cfg = DeviationConfig::default();
+    for surface in [SurfaceModel::Linear, SurfaceModel::Exact] {
+        let fast = measure_with(&r, &[&fwd], &tp, &cfg, surface, Locator::Fast).unwrap();
+        let refr = measure_with(&r, &[&fwd], &tp, &cfg, surface, Locator::Reference).unwrap();
+        assert!(fast.stats.crossed > 1000, "{:?}", fast.stats);
+        assert_same(&fast, &refr, &format!("dome zig-zag {surface:?}"));
+    }
+
+    let bull = Cutter::bull(38.0, 3.0).unwrap();
+    let surface = TestSurface::Blade {
+        twist_rad_per_mm: 0.004,
+    };
+    let spec = PassSpec {
+        surface,
+        v_mm: 20.0,
+        u0_mm: 0.0,
+        poses: 16,
+        step_mm: 1.5,
+        lead_deg: 8.0,
+        lead_wobble_deg: 2.0,
+        wobble_period_mm: 30.0,
+        tilt_deg: 3.0,
+    };
+    let path = pass(&spec, &bull);
+    let lines = normal_lines(&surface, (2.0, 20.0), (12.0, 28.0), 19, 17, 0.0);
+    let r = RefinedMesh {
+        positions: lines.iter().map(|l| l.0).collect(),
+        normals: lines.iter().map(|l| l.1).collect(),
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 1.0,
+    };
+    let cfg5 = SweepConfig {
+        max_step_mm: 0.25,
+        ..SweepConfig::default()
+    };
+    let fwd = SweepModel::new(&path, &bull, &cfg5);
+    let rev = SweepModel::new(
+        &path,
+        &bull,
+        &SweepConfig {
+            reverse: true,
+            ..cfg5
+        },
+    );
+    for surface in [SurfaceModel::Linear, SurfaceModel::Exact] {
+        let models = [&fwd, &rev];
+        let fast = measure_with(&r, &models, &path, &cfg, surface, Locator::Fast).unwrap();
+        let refr = measure_with(&r, &models, &path, &cfg, surface, Locator::Reference).unwrap();
+        assert!(fast.stats.crossed > 200, "{:?}", fast.stats);
+        assert_same(&fast, &refr, &format!("5-axis blade {surface:?}"));
+    }
+}
+
+/// The measurement is the same on 1 and on 2 threads, bit for bit.
+#[test]
+fn measurement_does_not_depend_on_threads() {
+    let ball = Cutter::ball(6.0).unwrap();
+    let tp = dome_zigzag(3.0, (-10.0, 10.0), (-4.0, 4.0), 1.0);
+    let r = refined_dome(0.05, &ball);
+    let fwd = SweepModel::new(&tp, &ball, &SweepConfig::default());
+    let cfg = DeviationConfig::default();
+    let run = |n: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .unwrap()
+            .install(|| {
+                measure_with(&r, &[&fwd], &tp, &cfg, SurfaceModel::Exact, Locator::Fast).unwrap()
+            })
+    };
+    assert_same(&run(1), &run(2), "1 vs 2 threads");
+}
+
+/// On the exact surface, vertical vectors from the dome's top surface at z-map nodes read
+/// exactly the machined height the independent z-map computes there (closed form for a
+/// ball). Like with like: both are the lowest point of the swept volume on the vertical
+/// through the node (the z-map sweeps every move; the path has no rapid over the part). The
+/// paper's linear surface reads up to the chord sag `r(1 − cos π/Q)` higher, and over the
+/// dome's crest, where the imprinted half flips and only the caps at the two poses stand for
+/// a step, up to that step's bulge `r − √(r² − (0.25 mm)²)` more.
+#[test]
+fn exact_surface_equals_zmap_on_vertical_lines() {
+    let ball = Cutter::ball(6.0).unwrap();
+    let tp = dome_zigzag(3.0, (-14.0, 14.0), (-8.0, 8.0), 1.1);
+    let grid = ZmapGrid::covering(-10.0, -5.0, 10.0, 5.0, 0.1).unwrap();
+    let zm = zmap::machine(&tp, &ball, &ZmapConfig::new(grid)).unwrap();
+    let design = zmap::DesignHeights::new(&dome());
+    let mut positions = Vec::new();
+    let mut nodes = Vec::new();
+    for j in 0..grid.ny {
+        for i in 0..grid.nx {
+            let (x, y) = (grid.x(i), grid.y(j));
+            let z = design.top(x, y).expect("dome below").0;
+            positions.push(DVec3::new(x, y, z));
+            nodes.push((i, j));
+        }
+    }
+    let n = positions.len();
+    let r = RefinedMesh {
+        positions,
+        normals: vec![DVec3::Z; n],
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 0.1,
+    };
+    let fwd = SweepModel::new(&tp, &ball, &SweepConfig::default());
+    let cfg = DeviationConfig::default();
+    let sag = 3.0 * (1.0 - (std::f64::consts::PI / 40.0).cos());
+    let bulge = 3.0 - (9.0f64 - 0.25 * 0.25).sqrt();
+    for (surface, tol) in [
+        (SurfaceModel::Exact, 1e-9),
+        (SurfaceModel::Linear, sag + bulge),
+    ] {
+        let m = measure_with(&r, &[&fwd], &tp, &cfg, surface, Locator::Fast).unwrap();
+        let (mut worst, mut below) = (0.0f64, 0.0f64);
+        for (d, &(i, j)) in m.deviations.iter().zip(&nodes) {
+            let z = d.position.z + d.signed_mm.expect("every node is under the passes");
+            let diff = z - zm.height(i, j);
+            worst = worst.max(diff.abs());
+            below = below.min(diff);
+        }
+        println!("{surface:?}: |imprint − z-map| max {:.3e} mm", worst);
+        assert!(worst <= tol, "{surface:?}: {worst} > {tol}");
+        // The linear surface never lies below the true one (its points are on it, its chords
+        // inside the tool).
+        assert!(below >= -1e-9, "{surface:?}: {below} below the z-map");
+        if surface == SurfaceModel::Linear {
+            assert!(
+                worst > 0.3 * sag,
+                "linear surface suspiciously exact: {worst}"
+            );
+        }
+    }
+}
