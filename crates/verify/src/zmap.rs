@@ -212,15 +212,19 @@ impl Profile {
         let (dx, dy, dz) = (b.x - a.x, b.y - a.y, b.z - a.z);
         let l2 = dx * dx + dy * dy;
         let rr = self.big_r;
+        // The disc is closed: a node exactly on its rim (a side step passing at distance `R`)
+        // is reached, though the distance rounds a few ulps above `R`.
+        let reach = rr * (1.0 + 8.0 * f64::EPSILON);
         if l2 <= 1e-24 * (1.0 + wx * wx + wy * wy) {
             let d = (wx * wx + wy * wy).sqrt();
-            return (d <= rr).then(|| a.z.min(b.z) + self.h(d));
+            return (d <= reach).then(|| a.z.min(b.z) + self.h(d));
         }
         let l = l2.sqrt();
         let rho = (wx * dy - wy * dx).abs() / l;
-        if rho > rr {
+        if rho > reach {
             return None;
         }
+        let rho = rho.min(rr);
         let tc = (wx * dx + wy * dy) / l2;
         let c = (rr * rr - rho * rho).max(0.0).sqrt();
         let lo = (tc - c / l).max(0.0);
