@@ -414,6 +414,9 @@ pub fn run(a: PlanArgs) -> Result<()> {
         );
         if let Some(v) = &verification {
             eprintln!("cam {}", crate::verify::summary_line(v, a.tolerance));
+            if let Some(w) = crate::verify::topology_warning(v) {
+                eprintln!("cam plan: {w}");
+            }
         }
     }
     match &verification {

@@ -115,6 +115,9 @@ pub fn run(a: VerifyArgs) -> Result<()> {
         println!("{report}");
     } else {
         eprintln!("{}", summary_line(&v, a.tolerance));
+        if let Some(w) = topology_warning(&v) {
+            eprintln!("cam verify: {w}");
+        }
     }
     verdict(&v, a.tolerance)
 }
@@ -177,6 +180,27 @@ pub fn run_verification(
 }
 
 /// One line for the terminal.
+/// A warning when the design mesh's faces disagree on orientation or share edges three
+/// ways: there the normal-vector method cannot tell the material side, and vectors that
+/// start in the air read as gouges of up to `L_in`.
+pub fn topology_warning(v: &Verification) -> Option<String> {
+    let t = v.topology;
+    (t.misoriented_edges > 0 || t.non_manifold_edges > 0).then(|| {
+        format!(
+            "warning: the part has {} edges where neighbouring faces disagree on orientation \
+             and {} edges shared by more than two faces; gouges reported next to them may be \
+             the measurement starting outside the material (up to {} mm), not the tool",
+            t.misoriented_edges,
+            t.non_manifold_edges,
+            v.report
+                .settings
+                .as_ref()
+                .map_or(f64::NAN, |s| s.deviation.inside_mm),
+        )
+    })
+}
+
+/// One line: max gouge and excess, points within tolerance, unmachined, time.
 pub fn summary_line(v: &Verification, tol: f64) -> String {
     let r = &v.report;
     let worst = r.worst_gouges.first().map_or(String::new(), |w| {

@@ -5,6 +5,7 @@ pub mod exact;
 pub mod heatmap;
 pub mod imprint;
 pub mod locate;
+pub mod material;
 pub mod measure;
 pub mod model;
 pub mod pipeline;

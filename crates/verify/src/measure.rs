@@ -229,6 +229,18 @@ impl Refiner<'_> {
         }
     }
 
+    /// True when [`Refiner::refine`] answers `c` exactly (a cap, or a strip of a
+    /// translation: closed forms, or a root search on a convex distance that cannot miss),
+    /// so that finding no entry means the line misses that volume.
+    fn is_closed_form(&self, c: &Crossing) -> bool {
+        let model = self.models[c.model as usize];
+        match model.pieces[unkey(c.key).0] {
+            Piece::Cap { .. } => true,
+            Piece::Strip { step, .. } => self.geometry(step.mv).is_some_and(|g| g.is_translation()),
+            Piece::Gap { .. } => false,
+        }
+    }
+
     /// The geometry of feed move `mv`, if it is one.
     fn feed_geometry(&self, mv: u32) -> Option<MoveGeometry> {
         let m = self.toolpath.moves.get(mv as usize)?;
@@ -537,10 +549,34 @@ pub fn measure_with(
     surface: SurfaceModel,
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
+    let inner = vec![cfg.inside_mm; refined.positions.len()];
+    measure_with_inner(refined, &inner, models, toolpath, cfg, surface, locator)
+}
+
+/// [`measure_with`] with each vector's inner length `L_in(v)` given per vertex (mm, in
+/// place of `cfg.inside_mm`; see [`crate::material::inner_lengths`]).
+///
+/// # Errors
+/// [`DeviationError::BadLength`] for a negative or non-finite length, or when `inner_mm`
+/// does not hold one length per vertex.
+pub fn measure_with_inner(
+    refined: &RefinedMesh,
+    inner_mm: &[f64],
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+    locator: Locator,
+) -> Result<Measurement, DeviationError> {
     let ok = |x: f64| x.is_finite() && x >= 0.0;
-    if !ok(cfg.inside_mm) || !ok(cfg.outside_mm) {
+    let bad = inner_mm.iter().find(|&&x| !ok(x));
+    if !ok(cfg.inside_mm)
+        || !ok(cfg.outside_mm)
+        || bad.is_some()
+        || inner_mm.len() != refined.positions.len()
+    {
         return Err(DeviationError::BadLength {
-            inside_mm: cfg.inside_mm,
+            inside_mm: bad.copied().unwrap_or(cfg.inside_mm),
             outside_mm: cfg.outside_mm,
         });
     }
@@ -548,10 +584,11 @@ pub fn measure_with(
         .positions
         .iter()
         .zip(&refined.normals)
-        .map(|(&o, &n)| Vector {
+        .zip(inner_mm)
+        .map(|((&o, &n), &l_in)| Vector {
             o,
             n,
-            lo: -cfg.inside_mm,
+            lo: -l_in,
             hi: cfg.outside_mm,
         })
         .collect();
@@ -686,6 +723,9 @@ fn measure_vectors(
                 }
             };
             let mut done: Vec<(u8, u64)> = Vec::new();
+            // A crossing whose refinement found no entry where the answer is not in closed
+            // form (a rotating move's search): then the linear value stands in.
+            let mut inconclusive = false;
             if let Some(low) = low {
                 // Each crossing's true surface lies at most its window below it. In order of
                 // the crossings (lowest first): none beyond the best entry found plus the
@@ -726,6 +766,8 @@ fn measure_vectors(
                             p => p,
                         };
                         better(e, mv, (c.model, c.key), src, &mut best);
+                    } else if !rf.is_closed_form(c) {
+                        inconclusive = true;
                     }
                     // A translation's neighbours at the step's ends: near a joint the other
                     // move's volume may be the lower one.
@@ -826,6 +868,13 @@ fn measure_vectors(
                         Some(src),
                         stats,
                     )
+                }
+                (None, Some(_)) if !inconclusive => {
+                    // Every located crossing was tested exactly and the line enters none of
+                    // their volumes: it passes within the triangles' margin of the swept
+                    // surface but outside it.
+                    stats[0] = 1;
+                    (dev(None, None), 0.0, linear.map(|l| l.0), None, stats)
                 }
                 (None, Some((s, mv, fc))) => {
                     // Crossings located but none refined: keep the linear value.

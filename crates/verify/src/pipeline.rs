@@ -9,6 +9,7 @@ use std::time::Instant;
 use cam_core::{Cutter, Mesh, Toolpath};
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError};
+use crate::material;
 use crate::measure::{self, MeasureStats, SurfaceModel};
 use crate::model::SweepModel;
 use crate::refine::{self, RefineConfig, RefineError, RefinedMesh};
@@ -95,6 +96,12 @@ pub struct Verification {
     pub stats: MeasureStats,
     /// Stage timings.
     pub timings: Timings,
+    /// How the design mesh's faces join (misoriented or non-manifold edges make the
+    /// normal-vector method unreliable next to them).
+    pub topology: refine::Topology,
+    /// The inner lengths of the vectors of gouges deeper than the tolerance, clipped to the
+    /// material (see [`material`]; only those are checked).
+    pub inner: material::InnerLengths,
 }
 
 impl Verification {
@@ -102,6 +109,72 @@ impl Verification {
     pub fn swept_surface(&self) -> SweptSurface {
         SweptSurface::from_model(&self.swept)
     }
+}
+
+/// Re-measures the gouges whose vectors reached beyond the material (thin walls, skins open
+/// to the sky, [`material`]) with their inner length clipped to it. Only gouges deeper than
+/// the tolerance are checked: a vector's reading changes only when its entry lies deeper
+/// than its clipped length, and shallower readings are within tolerance either way.
+fn clip_to_material(
+    part: &Mesh,
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &VerifyConfig,
+    topology: &refine::Topology,
+    m: &mut measure::Measurement,
+) -> Result<material::InnerLengths, VerifyError> {
+    let gouges: Vec<usize> = (0..refined.len())
+        .filter(|&i| {
+            m.deviations[i]
+                .signed_mm
+                .is_some_and(|s| s < -cfg.tolerance_mm)
+        })
+        .collect();
+    if gouges.is_empty() {
+        return Ok(material::InnerLengths::default());
+    }
+    let inner = material::inner_lengths_at(
+        part,
+        refined,
+        &gouges,
+        cfg.deviation.inside_mm,
+        material::is_three_axis(toolpath),
+        topology.is_closed_and_oriented(),
+    );
+    let redo: Vec<(usize, f64)> = gouges
+        .iter()
+        .zip(&inner.inner_mm)
+        .filter(|&(&i, &l)| m.deviations[i].signed_mm.is_some_and(|s| s < -l))
+        .map(|(&i, &l)| (i, l))
+        .collect();
+    if redo.is_empty() {
+        return Ok(inner);
+    }
+    let sub = RefinedMesh {
+        positions: redo.iter().map(|&(i, _)| refined.positions[i]).collect(),
+        normals: redo.iter().map(|&(i, _)| refined.normals[i]).collect(),
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: refined.max_edge_mm,
+    };
+    let lens: Vec<f64> = redo.iter().map(|&(_, l)| l).collect();
+    let again = measure::measure_with_inner(
+        &sub,
+        &lens,
+        models,
+        toolpath,
+        &cfg.deviation,
+        cfg.surface,
+        measure::Locator::Fast,
+    )?;
+    for (k, &(i, _)) in redo.iter().enumerate() {
+        m.deviations[i] = again.deviations[k];
+        m.facing[i] = again.facing[k];
+        m.linear_mm[i] = again.linear_mm[k];
+        m.source[i] = again.source[k];
+    }
+    Ok(inner)
 }
 
 /// Vertices whose averaged normal is further than this from an adjacent face's normal sit
@@ -216,12 +289,15 @@ pub fn verify(
     // reads as a gouge. The bisector points into the material.
     rcfg.crease_angle_deg = 180.0;
     let refined = refine::refine(part, &rcfg)?;
+    let topology = refine::topology(part);
     timings.refine_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
     let mut models = vec![&swept];
     models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
-    let m = measure::measure(&refined, &models, toolpath, &cfg.deviation, cfg.surface)?;
+    // Inner vector lengths clipped to the material (thin walls, skins open to the sky).
+    let mut m = measure::measure(&refined, &models, toolpath, &cfg.deviation, cfg.surface)?;
+    let inner = clip_to_material(part, &refined, &models, toolpath, cfg, &topology, &mut m)?;
     let mut devs = m.deviations.clone();
     let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));
     crease_depths(&refined, &mut devs, &m, exact);
@@ -247,6 +323,17 @@ pub fn verify(
         },
     );
     extra.insert("refined_vectors".to_string(), m.stats.refined as f64);
+    extra.insert("thin_material_vectors".to_string(), inner.thin as f64);
+    extra.insert("open_above_vectors".to_string(), inner.open_above as f64);
+    extra.insert("boundary_edges".to_string(), topology.boundary_edges as f64);
+    extra.insert(
+        "non_manifold_edges".to_string(),
+        topology.non_manifold_edges as f64,
+    );
+    extra.insert(
+        "misoriented_edges".to_string(),
+        topology.misoriented_edges as f64,
+    );
     extra.insert(
         "kept_linear_vectors".to_string(),
         m.stats.kept_linear as f64,
@@ -270,5 +357,7 @@ pub fn verify(
         swept,
         stats: m.stats,
         timings,
+        topology,
+        inner,
     })
 }

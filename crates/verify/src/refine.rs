@@ -179,6 +179,56 @@ fn weld(mesh: &Mesh) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     (positions, tris)
 }
 
+/// How well the design mesh's faces join, counted on the welded mesh (corners with
+/// bit-identical coordinates are one vertex). The normal-vector method reads the material
+/// side from each face's orientation: it needs faces oriented consistently, and where they
+/// are not, vectors start in the air and can read as gouges of `L_in`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Topology {
+    /// Edges used by one face (the rim of an open surface).
+    pub boundary_edges: usize,
+    /// Edges used by more than two faces.
+    pub non_manifold_edges: usize,
+    /// Edges used by exactly two faces that run along it the same way: the two faces
+    /// disagree on which side is the material.
+    pub misoriented_edges: usize,
+}
+
+impl Topology {
+    /// True when every edge joins two faces that agree on orientation.
+    pub fn is_closed_and_oriented(&self) -> bool {
+        self.boundary_edges == 0 && self.non_manifold_edges == 0 && self.misoriented_edges == 0
+    }
+}
+
+/// Counts the boundary, non-manifold and misoriented edges of `mesh` (see [`Topology`]).
+pub fn topology(mesh: &Mesh) -> Topology {
+    let (_, tris) = weld(mesh);
+    // Per undirected edge: uses, and uses running from the lower to the higher index.
+    let mut uses: IntMap<u64, (u32, u32)> = IntMap::default();
+    for t in &tris {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a == b {
+                continue;
+            }
+            let e = uses.entry(edge_key(a, b)).or_insert((0, 0));
+            e.0 += 1;
+            e.1 += u32::from(a < b);
+        }
+    }
+    let mut topo = Topology::default();
+    for &(n, forward) in uses.values() {
+        match n {
+            1 => topo.boundary_edges += 1,
+            2 if forward != 1 => topo.misoriented_edges += 1,
+            2 => {}
+            _ => topo.non_manifold_edges += 1,
+        }
+    }
+    topo
+}
+
 fn estimate_vertices(area_mm2: f64, s: f64) -> usize {
     // Longest-edge refinement of typical meshes ends with edges between s/2 and s; a regular
     // triangulation of edge ~0.7·s has about 2·area/(√3·(0.7 s)²)/2 vertices.
@@ -460,4 +510,68 @@ fn vertex_normals(
         }
     }
     (out_pos, out_n, out_tris)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cam_core::Triangle;
+
+    fn mesh(t: Vec<Triangle>) -> Mesh {
+        Mesh::from_triangles(t, "<memory>").expect("mesh")
+    }
+
+    /// A tetrahedron with outward faces.
+    fn tetra() -> Vec<Triangle> {
+        let (a, b, c, d) = (DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z);
+        vec![
+            Triangle::new(a, c, b),
+            Triangle::new(a, b, d),
+            Triangle::new(b, c, d),
+            Triangle::new(c, a, d),
+        ]
+    }
+
+    #[test]
+    fn topology_counts_rims_flips_and_fins() {
+        assert!(topology(&mesh(tetra())).is_closed_and_oriented());
+        // One face flipped: its three edges each join two faces running the same way.
+        let mut t = tetra();
+        t[2] = Triangle::new(t[2].v[0], t[2].v[2], t[2].v[1]);
+        let topo = topology(&mesh(t));
+        assert_eq!(
+            (
+                topo.boundary_edges,
+                topo.non_manifold_edges,
+                topo.misoriented_edges
+            ),
+            (0, 0, 3)
+        );
+        // One face removed: its three edges are the rim.
+        let topo = topology(&mesh(tetra()[..3].to_vec()));
+        assert_eq!(
+            (
+                topo.boundary_edges,
+                topo.non_manifold_edges,
+                topo.misoriented_edges
+            ),
+            (3, 0, 0)
+        );
+        // A fin on edge a-b: that edge has three faces, the fin's other two edges are rims.
+        let mut t = tetra();
+        t.push(Triangle::new(
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(0.5, -1.0, 0.0),
+        ));
+        let topo = topology(&mesh(t));
+        assert_eq!(
+            (
+                topo.boundary_edges,
+                topo.non_manifold_edges,
+                topo.misoriented_edges
+            ),
+            (2, 1, 0)
+        );
+    }
 }

@@ -5,7 +5,12 @@ use cam_verify::{VerifyConfig, verify};
 
 /// A block x ∈ [-20, 0], y ∈ [-10, 10], z ∈ [-10, 0] (closed, outward winding).
 fn block() -> Mesh {
-    let (x0, x1, y0, y1, z0, z1) = (-20.0, 0.0, -10.0, 10.0, -10.0, 0.0);
+    box_mesh(-20.0, 0.0)
+}
+
+/// A box x ∈ [x0, x1], y ∈ [-10, 10], z ∈ [-10, 0] (closed, outward winding).
+fn box_mesh(x0: f64, x1: f64) -> Mesh {
+    let (y0, y1, z0, z1) = (-10.0, 10.0, -10.0, 0.0);
     let p = |x, y, z| DVec3::new(x, y, z);
     let quad =
         |a: DVec3, b: DVec3, c: DVec3, d: DVec3| [Triangle::new(a, b, c), Triangle::new(a, c, d)];
@@ -106,5 +111,39 @@ fn gouge_on_a_face_reads_its_depth() {
     assert!(
         (0.03 - 1e-3..=0.03 + 1e-9).contains(&g),
         "max gouge {g}, expected 0.03"
+    );
+}
+
+/// A fin 0.4 mm thick (x ∈ [-0.4, 0], top z = 0) and a flat end mill running along its +x
+/// face, tangent to it, its bottom 0.5 mm below the top. Nothing is cut. Two false gouges
+/// this guards against:
+/// - the vectors at the fin's −x top edge run along the bisector, (0.71, 0, −0.71) inward:
+///   through the fin (out of its +x face at 0.57 mm) and, before `L_in` = 1 mm, into the
+///   mill's bottom, unless the vector is clipped to the material (half the fin along it);
+/// - top-face vectors within a few µm of the +x edge pass just outside the mill's rim but
+///   inside the swept triangles' margin: the exact test says no entry, and that answer
+///   stands (the linear crossing is not kept in its place).
+#[test]
+fn a_thin_fin_is_not_gouged_through_from_the_far_side() {
+    let cutter: Cutter = "flat:6".parse().unwrap();
+    let fin = box_mesh(-0.4, 0.0);
+    let mut cfg = VerifyConfig::new(0.01);
+    cfg.resolution_mm = 0.02;
+    let v = verify(&fin, &pass(3.0, -0.5), &cutter, &cfg).expect("verify");
+    let far_edge: Vec<f64> = (0..v.refined.len())
+        .filter(|&i| v.refined.normals[i].x < -0.5 && v.refined.normals[i].z > 0.5)
+        .filter_map(|i| v.deviations[i].signed_mm)
+        .collect();
+    assert!(
+        far_edge.iter().all(|&s| s >= -1e-9),
+        "the −x top edge reads {far_edge:?}"
+    );
+    assert!(v.inner.thin > 0, "no vector clipped to the material");
+    assert_eq!(v.inner.open_above, 0, "a closed fin has no open side");
+    assert!(
+        v.report.max_gouge_mm <= 1e-9,
+        "max gouge {}, worst {:?}",
+        v.report.max_gouge_mm,
+        v.report.worst_gouges.first()
     );
 }
