@@ -189,13 +189,38 @@ const CREASE_DEG: f64 = 10.0;
 /// the linear surface, its distance to the crossed triangle's plane, `|t · (n_s · d)|` (the
 /// depth to first order, `facing[i] = n_s · d`). Smooth vertices keep the paper's distance
 /// along the normal.
+///
+/// The rim of an open mesh is treated the same way: there the surface simply ends, a tool
+/// passing beyond it reaches under the rim from outside, and the distance along the normal
+/// measures the tool against the face's plane continued past the rim, not against the part
+/// (on the open tilted plane a ball hanging over a corner read 0.0146 mm along the normal;
+/// no rim vertex lies deeper than 0.0059 mm inside the swept volume).
 fn crease_depths(
     refined: &RefinedMesh,
     devs: &mut [Deviation],
     m: &measure::Measurement,
     exact: Option<(&[&SweepModel], &Toolpath)>,
+    open: bool,
 ) {
     let mut cos_min = vec![1.0f64; refined.positions.len()];
+    // The rim of an open mesh: vertices on an edge of one face.
+    let mut on_rim = vec![false; refined.positions.len()];
+    if open {
+        let mut uses: std::collections::HashMap<(u32, u32), u32> =
+            std::collections::HashMap::with_capacity(3 * refined.triangles.len() / 2);
+        for t in &refined.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
+            }
+        }
+        for (&(a, b), &n) in &uses {
+            if n == 1 {
+                on_rim[a as usize] = true;
+                on_rim[b as usize] = true;
+            }
+        }
+    }
     for t in &refined.triangles {
         let [a, b, c] = t.map(|i| refined.positions[i as usize]);
         let Some(nf) = (b - a).cross(c - a).try_normalize() else {
@@ -211,7 +236,7 @@ fn crease_depths(
         let Some(s) = d.signed_mm.filter(|s| *s < 0.0) else {
             continue;
         };
-        if cos_min[i] >= crease {
+        if cos_min[i] >= crease && !on_rim[i] {
             continue;
         }
         let first_order = s * m.facing[i].abs().min(1.0);
@@ -300,7 +325,7 @@ pub fn verify(
     let inner = clip_to_material(part, &refined, &models, toolpath, cfg, &topology, &mut m)?;
     let mut devs = m.deviations.clone();
     let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));
-    crease_depths(&refined, &mut devs, &m, exact);
+    crease_depths(&refined, &mut devs, &m, exact, topology.boundary_edges > 0);
     timings.measure_s = t.elapsed().as_secs_f64();
 
     let lines: Vec<Option<usize>> = toolpath.moves.iter().map(|m| m.line).collect();

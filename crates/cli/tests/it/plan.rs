@@ -240,3 +240,34 @@ fn no_tool_fits_exit_2_names_region_radius_and_closest_tool() {
     assert!(e.contains('6'), "radius named: {e}");
     assert!(!out.exists());
 }
+
+/// `cam plan` verifies what it planned, and on an open part that verification must agree
+/// with the planner's guarantee: the tilted plane is an open sheet, and balls and bulls
+/// hang over its rim at the pass ends. Along the rim vertices' normals the tool reads up to
+/// 0.0146 mm (the face's plane continued past the rim), so there the verifier reports the
+/// vertex's depth in the swept volume, which the planner bounds by τ.
+#[test]
+fn plan_verifies_an_open_part_within_tolerance() {
+    let part = root().join("fixtures/parts/tilted_plane.obj");
+    let d = tempfile::tempdir().unwrap();
+    for tool in ["ball:6", "bull:6:1.5"] {
+        let out = d.path().join("p.ngc");
+        let o = cam(&[
+            "plan",
+            part.to_str().unwrap(),
+            "--tool",
+            tool,
+            "--scallop",
+            "0.05",
+            "--tolerance",
+            "0.01",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{tool}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        let g = v["verify"]["max_gouge_mm"].as_f64().expect("max_gouge_mm");
+        assert!(g <= 0.01, "{tool}: verified gouge {g}");
+    }
+}

@@ -26,6 +26,7 @@
 use cam_core::{Cutter, CutterKind, DVec3, Mesh, Toolpath, Triangle, Units};
 use cam_gcode::{Post, PostJob, ReadConfig, parse_gcode, post_to_string};
 use cam_plan::{Plan, PlanConfig, plan_part};
+use cam_verify::depth::SweptDepth;
 use cam_verify::zmap::{Zmap, ZmapConfig, ZmapGrid, compare_with_part, machine};
 
 use crate::support::root;
@@ -562,53 +563,12 @@ struct Case<'a> {
     min_scallop_fraction: f64,
 }
 
-/// Exact depth (mm) of the point `p` inside the volume a ball or bull cutter sweeps along the
-/// moves of `tp`: the swept volume is the core (the ring of corner centres, a disc of radius
-/// `a` at height `r` above the tip) swept along each move, grown by the corner radius `r`,
-/// so the depth is `r` minus the distance from `p` to the swept core; along a straight move
-/// that distance is a convex function of the move parameter (distance to a convex set along
-/// a line), minimised by ternary search. Negative when `p` is outside.
-fn swept_depth(tp: &Toolpath, cutter: &Cutter, p: DVec3) -> f64 {
-    let (a, r, big) = (
-        cutter.major_radius(),
-        cutter.corner_radius(),
-        cutter.radius(),
-    );
-    let dist = |c: DVec3| {
-        let q = p - (c + DVec3::Z * r);
-        let rad = (q.x * q.x + q.y * q.y).sqrt();
-        ((rad - a).max(0.0).powi(2) + q.z * q.z).sqrt()
-    };
-    let mut depth = f64::NEG_INFINITY;
-    for w in tp.moves.windows(2) {
-        let (s, e) = (w[0].pose.tip, w[1].pose.tip);
-        let lo = s.truncate().min(e.truncate()) - glam::DVec2::splat(big);
-        let hi = s.truncate().max(e.truncate()) + glam::DVec2::splat(big);
-        if p.x < lo.x || p.y < lo.y || p.x > hi.x || p.y > hi.y {
-            continue;
-        }
-        let (mut t0, mut t1) = (0.0f64, 1.0f64);
-        for _ in 0..100 {
-            let m1 = t0 + (t1 - t0) / 3.0;
-            let m2 = t1 - (t1 - t0) / 3.0;
-            if dist(s.lerp(e, m1)) <= dist(s.lerp(e, m2)) {
-                t1 = m2;
-            } else {
-                t0 = m1;
-            }
-        }
-        let d = dist(s.lerp(e, 0.5 * (t0 + t1))).min(dist(s)).min(dist(e));
-        depth = depth.max(r - d);
-    }
-    depth
-}
-
 /// Plans `part` and checks the z-map of the re-read G-code over the whole part (grid `res`):
 /// every node where the vertical gouge exceeds τ plus the effect of the post's rounding
 /// there (5e-5 mm in z plus 7.1e-5 mm in xy times the part's slope at the node: a horizontal
 /// shift δ of a cutter touching a surface of slope tan θ changes the vertical penetration by
 /// δ·tan θ to first order) must, for ball and bull cutters, lie at most τ + [`ROUND_MM`] deep
-/// in the swept volume ([`swept_depth`], exact): the planner guarantees the cutter's
+/// in the swept volume ([`SweptDepth`], exact): the planner guarantees the cutter's
 /// penetration, which the vertical depth over-states where the cutter's surface is steep (a
 /// ball rolling off the part's outer edge grazes it sideways). Flat end mills keep the
 /// vertical bound. Node values are exact; a gouge between nodes can only be missed, never
@@ -639,6 +599,7 @@ fn no_gouge(part: &Mesh, case: Case<'_>) {
     let cmp = compare_with_part(&z, &part);
     let mut worst_excess_over_bound = f64::NEG_INFINITY;
     let mut worst_node = None;
+    let depths = SweptDepth::new(&tp, &cfg.cutter);
     let mut deep_checked = 0;
     let mut deepest = 0.0f64;
     for n in &cmp.nodes {
@@ -648,7 +609,7 @@ fn no_gouge(part: &Mesh, case: Case<'_>) {
         let mut over = -n.vertical_mm - bound;
         if over > 0.0 && cfg.cutter.kind() != CutterKind::Flat {
             let (x, y) = (z.grid.x(n.i as usize), z.grid.y(n.j as usize));
-            let depth = swept_depth(&tp, &cfg.cutter, DVec3::new(x, y, n.design_z_mm));
+            let depth = depths.depth(DVec3::new(x, y, n.design_z_mm));
             deep_checked += 1;
             deepest = deepest.max(depth);
             over = depth - (tau + ROUND_MM);
