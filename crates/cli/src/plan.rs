@@ -208,6 +208,18 @@ pub fn run(a: PlanArgs) -> Result<()> {
         ..PlanConfig::default()
     };
     cfg.validate()?;
+    // τ holds in the program as written: plan to τ less the post's rounding.
+    let rounding = cam_gcode::rounding_mm(a.gcode_units);
+    if a.tolerance <= 2.0 * rounding {
+        anyhow::bail!(
+            "--tolerance {} mm is below what a program in {} can hold: its coordinates are \
+             rounded by up to {rounding:.1e} mm; use at least {:.4} mm",
+            a.tolerance,
+            a.gcode_units,
+            2.0 * rounding
+        );
+    }
+    cfg.tolerance_mm = a.tolerance - rounding;
     let (assembly, chosen) = choose_tool(&a, &mesh, &cfg)?;
     let cutter = assembly.cutter;
     cfg.cutter = cutter;
@@ -374,6 +386,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
         "plunge_retract_length_mm": plunge_len,
         "estimated_cycle_time_min": cycle_min,
         "max_chord_deviation_mm": plan.max_chord_deviation_mm,
+        "planned_tolerance_mm": cfg.tolerance_mm, "rounding_mm": rounding,
         "sampled_moves": plan.sampled_moves,
         "predicted_max_scallop_mm": plan.predicted_max_scallop_mm,
         "unresolved_joins": plan.unresolved_joins,
@@ -399,7 +412,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             cut_len,
             rapid_len,
             cycle_min,
-            plan.max_chord_deviation_mm,
+            plan.max_chord_deviation_mm + rounding,
             a.tolerance,
             if plan.sampled_moves > 0 {
                 format!(", {} moves checked by sampling", plan.sampled_moves)

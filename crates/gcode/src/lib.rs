@@ -25,5 +25,5 @@ mod words;
 
 pub use apt::{AptHeader, parse_apt, read_apt, write_apt};
 pub use error::{GcodeError, PostError, ReadError};
-pub use post::{Post, PostJob, post, post_to_string};
+pub use post::{Post, PostJob, post, post_to_string, rounding_mm};
 pub use reader::{ReadConfig, parse_gcode, read_gcode};

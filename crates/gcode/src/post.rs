@@ -230,6 +230,24 @@ fn validate(tp: &Toolpath, job: &PostJob) -> Result<(), PostError> {
     Ok(())
 }
 
+/// Fixed decimals of coordinates in a program of `units`.
+fn coordinate_decimals(units: Units) -> usize {
+    match units {
+        Units::Mm => 4,
+        Units::Inch => 5,
+    }
+}
+
+/// The largest distance (mm) between a tool position and the position a program in `units`
+/// writes for it: half the last written decimal on each of X, Y and Z, `√3 · ½·10⁻ᵈ` units
+/// (8.7e-5 mm for mm programs, 2.2e-4 mm for inch). A move between written points lies
+/// within this of the move between the exact ones, so the cutter's penetration and excess
+/// change by at most this much: a planner that must hold a tolerance in the written program
+/// plans to the tolerance less this.
+pub fn rounding_mm(units: Units) -> f64 {
+    3f64.sqrt() * 0.5 * 10f64.powi(-(coordinate_decimals(units) as i32)) * units.mm_per_unit()
+}
+
 struct Writer<'a> {
     job: &'a PostJob,
     post: Post,
@@ -244,9 +262,10 @@ struct Writer<'a> {
 
 impl<'a> Writer<'a> {
     fn new(job: &'a PostJob, post: Post) -> Self {
-        let (decimals, feed_decimals) = match job.units {
-            Units::Mm => (4, 1),
-            Units::Inch => (5, 2),
+        let decimals = coordinate_decimals(job.units);
+        let feed_decimals = match job.units {
+            Units::Mm => 1,
+            Units::Inch => 2,
         };
         Writer {
             job,

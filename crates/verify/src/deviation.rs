@@ -246,6 +246,79 @@ impl TriangleBvh {
 }
 
 impl TriangleBvh {
+    /// The distance (mm) from `p` to the nearest triangle, when some triangle is nearer
+    /// than `r`; `None` otherwise. Boxes farther than the best so far are pruned.
+    pub fn nearest_within(&self, p: DVec3, r: f64) -> Option<f64> {
+        if self.tris.is_empty() || r.is_nan() || r <= 0.0 {
+            return None;
+        }
+        let mut best = r;
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = self.nodes[stack[top] as usize];
+            let gap = (n.min - p).max(p - n.max).max(DVec3::ZERO);
+            if gap.length() >= best {
+                continue;
+            }
+            if n.count > 0 {
+                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
+                    best = best.min(p.distance(closest_on_triangle(p, t)));
+                }
+            } else {
+                stack[top] = n.first + 1;
+                stack[top + 1] = n.first;
+                top += 2;
+            }
+        }
+        (best < r).then_some(best)
+    }
+}
+
+/// The point of triangle `t` closest to `p` (Voronoi regions of its corners, edges and
+/// face).
+fn closest_on_triangle(p: DVec3, t: &Triangle) -> DVec3 {
+    let [a, b, c] = t.v;
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = va + vb + vc;
+    if denom == 0.0 {
+        // Degenerate: the nearest of the corners.
+        return [a, b, c]
+            .into_iter()
+            .min_by(|x, y| p.distance_squared(*x).total_cmp(&p.distance_squared(*y)))
+            .unwrap_or(a);
+    }
+    a + ab * (vb / denom) + ac * (vc / denom)
+}
+
+impl TriangleBvh {
     /// The accepted crossing of the segment `origin + t·dir`, `t ∈ [t0, t1]`, with the
     /// smallest `t` (ties: the smaller triangle index). Visits near boxes first and prunes
     /// boxes entered beyond the best crossing so far, so a segment through many stacked

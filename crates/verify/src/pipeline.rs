@@ -8,7 +8,7 @@ use std::time::Instant;
 
 use cam_core::{Cutter, Mesh, Toolpath};
 
-use crate::deviation::{Deviation, DeviationConfig, DeviationError};
+use crate::deviation::{Deviation, DeviationConfig, DeviationError, TriangleBvh};
 use crate::material;
 use crate::measure::{self, MeasureStats, SurfaceModel};
 use crate::model::SweepModel;
@@ -195,12 +195,19 @@ const CREASE_DEG: f64 = 10.0;
 /// measures the tool against the face's plane continued past the rim, not against the part
 /// (on the open tilted plane a ball hanging over a corner read 0.0146 mm along the normal;
 /// no rim vertex lies deeper than 0.0059 mm inside the swept volume).
+///
+/// And so is a smooth vertex whose entry point `p + s·n` lies nearer to some face of the
+/// design than `|s|` (on a plane its own face is exactly `|s|` away): its vector runs under
+/// an edge, where a tool rolling over the edge is met at a glancing angle (on pycam-textbox
+/// a top-face vertex 1.7 µm from the box's edge read 0.066 mm along its normal under a ball
+/// that rolled off the edge within τ).
 fn crease_depths(
     refined: &RefinedMesh,
     devs: &mut [Deviation],
     m: &measure::Measurement,
     exact: Option<(&[&SweepModel], &Toolpath)>,
     open: bool,
+    part: &TriangleBvh,
 ) {
     let mut cos_min = vec![1.0f64; refined.positions.len()];
     // The rim of an open mesh: vertices on an edge of one face.
@@ -232,11 +239,16 @@ fn crease_depths(
         }
     }
     let crease = CREASE_DEG.to_radians().cos();
+    let sharp = |i: usize| cos_min[i] < crease || on_rim[i];
     for (i, d) in devs.iter_mut().enumerate() {
         let Some(s) = d.signed_mm.filter(|s| *s < 0.0) else {
             continue;
         };
-        if cos_min[i] >= crease && !on_rim[i] {
+        // A smooth vertex whose entry point lies nearer to another part of the design than
+        // to its own face sees a crease's glancing geometry too: its vector runs under an
+        // edge within that distance.
+        let entry = refined.positions[i] + s * refined.normals[i];
+        if !sharp(i) && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none() {
             continue;
         }
         let first_order = s * m.facing[i].abs().min(1.0);
@@ -325,7 +337,15 @@ pub fn verify(
     let inner = clip_to_material(part, &refined, &models, toolpath, cfg, &topology, &mut m)?;
     let mut devs = m.deviations.clone();
     let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));
-    crease_depths(&refined, &mut devs, &m, exact, topology.boundary_edges > 0);
+    let part_bvh = TriangleBvh::new(part.triangles());
+    crease_depths(
+        &refined,
+        &mut devs,
+        &m,
+        exact,
+        topology.boundary_edges > 0,
+        &part_bvh,
+    );
     timings.measure_s = t.elapsed().as_secs_f64();
 
     let lines: Vec<Option<usize>> = toolpath.moves.iter().map(|m| m.line).collect();

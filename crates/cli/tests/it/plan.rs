@@ -271,3 +271,57 @@ fn plan_verifies_an_open_part_within_tolerance() {
         assert!(g <= 0.01, "{tool}: verified gouge {g}");
     }
 }
+
+/// τ is held in the program as written: the planner works to τ less the post's rounding
+/// (reported in the JSON), and a τ the program's decimals cannot hold is refused.
+#[test]
+fn plan_tolerance_leaves_room_for_the_programs_rounding() {
+    let part = root().join("fixtures/parts/tilted_plane.obj");
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("p.ngc");
+    for (units, rounding) in [
+        ("mm", 3f64.sqrt() * 5e-5),
+        ("inch", 3f64.sqrt() * 5e-6 * 25.4),
+    ] {
+        let o = cam(&[
+            "plan",
+            part.to_str().unwrap(),
+            "--tool",
+            "flat:6",
+            "--tolerance",
+            "0.01",
+            "--gcode-units",
+            units,
+            "--no-verify",
+            "--json",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(0), "{units}: {}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("json");
+        let planned = v["planned_tolerance_mm"]
+            .as_f64()
+            .expect("planned_tolerance_mm");
+        assert!(
+            (planned - (0.01 - rounding)).abs() < 1e-12,
+            "{units}: {planned}"
+        );
+        assert!(v["max_chord_deviation_mm"].as_f64().unwrap() <= planned + 1e-12);
+    }
+    let o = cam(&[
+        "plan",
+        part.to_str().unwrap(),
+        "--tolerance",
+        "0.0003",
+        "--gcode-units",
+        "inch",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let e = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("--tolerance 0.0003") && e.contains("inch"),
+        "{e}"
+    );
+}

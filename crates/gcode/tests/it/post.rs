@@ -3,7 +3,9 @@
 
 use crate::support::{mv, small_path};
 use cam_core::{DVec3, MoveKind, Toolpath, Units};
-use cam_gcode::{Post, PostError, PostJob, ReadConfig, parse_gcode, post, post_to_string};
+use cam_gcode::{
+    Post, PostError, PostJob, ReadConfig, parse_gcode, post, post_to_string, rounding_mm,
+};
 
 pub fn job(units: Units) -> PostJob {
     PostJob {
@@ -41,9 +43,10 @@ fn every_post_reads_back_to_the_planned_tips() {
             let back = parse_gcode(&text, &ReadConfig::default())
                 .unwrap_or_else(|e| panic!("{p} {units}: {e}\n{text}"));
             assert_eq!(back.moves.len(), tp.moves.len(), "{p} {units}\n{text}");
-            let mut max: f64 = 0.0;
+            let (mut max, mut dist): (f64, f64) = (0.0, 0.0);
             for (a, b) in tp.moves.iter().zip(&back.moves) {
                 max = max.max((a.pose.tip - b.pose.tip).abs().max_element());
+                dist = dist.max(a.pose.tip.distance(b.pose.tip));
                 assert_eq!(a.kind, b.kind, "{p} {units}: {a:?} vs {b:?}");
                 let want_feed = match a.kind {
                     MoveKind::Rapid => None,
@@ -63,6 +66,13 @@ fn every_post_reads_back_to_the_planned_tips() {
                 max <= last_digit_mm(units) / 2.0 + 1e-12,
                 "{p} {units}: {max:e}"
             );
+            // The bound the planner subtracts from τ: √3 half-digits, and it holds.
+            let bound = rounding_mm(units);
+            assert!(
+                (bound - 3f64.sqrt() * last_digit_mm(units) / 2.0).abs() < 1e-15,
+                "{units}: rounding_mm {bound:e}"
+            );
+            assert!(dist <= bound + 1e-12, "{p} {units}: {dist:e} > {bound:e}");
         }
     }
 }

@@ -412,3 +412,55 @@ fn imprint_sweep_agrees_with_zmap_within_chord_sag() {
         );
     }
 }
+
+/// `TriangleBvh::nearest_within` against a dense sampling of each triangle: never farther
+/// than the nearest sample, never nearer than it minus the sampling step.
+#[test]
+fn nearest_within_matches_sampled_distances() {
+    use cam_verify::deviation::TriangleBvh;
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut rnd = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64 * 10.0 - 5.0
+    };
+    let tris: Vec<cam_core::Triangle> = (0..40)
+        .map(|_| {
+            let a = cam_core::DVec3::new(rnd(), rnd(), rnd());
+            cam_core::Triangle::new(
+                a,
+                a + 0.4 * cam_core::DVec3::new(rnd(), rnd(), rnd()),
+                a + 0.4 * cam_core::DVec3::new(rnd(), rnd(), rnd()),
+            )
+        })
+        .collect();
+    let bvh = TriangleBvh::new(&tris);
+    let n = 120;
+    for _ in 0..60 {
+        let p = cam_core::DVec3::new(rnd(), rnd(), rnd());
+        let (mut sampled, mut step) = (f64::INFINITY, 0.0f64);
+        for t in &tris {
+            let [a, b, c] = t.v;
+            step = step.max((b - a).length().max((c - a).length()) / n as f64);
+            for i in 0..=n {
+                for j in 0..=n - i {
+                    let q = a + (b - a) * (i as f64 / n as f64) + (c - a) * (j as f64 / n as f64);
+                    sampled = sampled.min(p.distance(q));
+                }
+            }
+        }
+        let d = bvh.nearest_within(p, 100.0).expect("within 100 mm");
+        assert!(d <= sampled + 1e-12, "{p}: {d} > sampled {sampled}");
+        assert!(
+            d >= sampled - 1.5 * step,
+            "{p}: {d} < sampled {sampled} − step"
+        );
+        assert_eq!(
+            bvh.nearest_within(p, d),
+            None,
+            "strictly nearer than itself"
+        );
+        assert!(bvh.nearest_within(p, d * (1.0 + 1e-9) + 1e-12).is_some());
+    }
+}
