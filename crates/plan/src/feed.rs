@@ -42,6 +42,12 @@ pub const DIP_FRACTION: f64 = 0.25;
 /// Largest rise of material above a plane accepted for a planar gap, as a share of τ.
 pub const RISE_FRACTION: f64 = 0.25;
 
+/// On the sampled path, a gap whose two samples rest on one plane that the material within
+/// reach rises above is split down to this share of the sample spacing before its midpoint
+/// is trusted (on mount_rush a flat end mill's 1.03 mm gap hid a 0.3 mm shelf whose edge
+/// drops 0.08 mm next to the midpoint: a 0.094 mm gouge).
+pub const RAISED_PLANE_SPLIT: f64 = 0.125;
+
 /// Gaps shorter than this (mm, along `u`) are not refined further.
 pub const MIN_DU_MM: f64 = 1e-5;
 
@@ -355,14 +361,19 @@ fn classify(s: &dyn ClSurface, f: &Raster, v: f64, p: &Profile, j: usize, chk: &
     let ((ua, za), (ub, zb)) = (p.pts[j], p.pts[j + 1]);
     let (ca, cb) = (&p.cert[j], &p.cert[j + 1]);
     let du = ub - ua;
-    if let Some((n, d)) = same_plane(ca.plane, cb.plane)
-        && let Some(b) = s.plane_bound(xy(f, ua, v), xy(f, ub, v), n, d, chk.rise_budget)
-        && b.covered
-    {
-        return Action::Done(Gap::Planar {
-            rise: b.rise_mm,
-            nz: n.z,
-        });
+    // Both samples on one plane, but material within reach rises above it: something (a
+    // shelf, a step) lifts the CL surface between them that neither sample sees.
+    let mut raised_plane = false;
+    if let Some((n, d)) = same_plane(ca.plane, cb.plane) {
+        match s.plane_bound(xy(f, ua, v), xy(f, ub, v), n, d, chk.rise_budget) {
+            Some(b) if b.covered => {
+                return Action::Done(Gap::Planar {
+                    rise: b.rise_mm,
+                    nz: n.z,
+                });
+            }
+            _ => raised_plane = true,
+        }
     }
     let tiny = du <= MIN_DU_MM;
     let mid = 0.5 * (ua + ub);
@@ -408,7 +419,10 @@ fn classify(s: &dyn ClSurface, f: &Raster, v: f64, p: &Profile, j: usize, chk: &
                 dz: (zb - za).abs(),
             })
         }
-    } else if du > chk.spacing {
+    } else if du > chk.spacing || (raised_plane && du > RAISED_PLANE_SPLIT * chk.spacing) {
+        // A flat end mill's CL section can step up over a shelf and drop off it again
+        // within the gap, with both ends (and the midpoint, if the drop is near it) on the
+        // plane: one midpoint does not see it, so such gaps are split further.
         Action::Split(mid)
     } else {
         // No corner radius: the excess side by the contact pieces where the surface
@@ -514,12 +528,11 @@ fn refine(s: &dyn ClSurface, f: &Raster, v: f64, mut p: Profile, chk: &Check) ->
                 Action::TestUpper(dip) => {
                     let m = mids[wi];
                     wi += 1;
-                    let ((ua, za), (ub, zb)) = (p.pts[j], p.pts[j + 1]);
+                    let ((_, za), (_, zb)) = (p.pts[j], p.pts[j + 1]);
                     let lerp = 0.5 * (za + zb);
-                    // Normal to the chord: the gouge side bounds the cutter's penetration.
-                    let cos = 1.0 / (1.0 + ((zb - za) / (ub - ua)).powi(2)).sqrt();
+                    // Vertical, as the move check (`move_bound`, sampled path).
                     match m {
-                        Some(c) if (c.z - lerp) * cos <= chk.eta / 2.0 => {
+                        Some(c) if c.z - lerp <= chk.eta / 2.0 => {
                             p.gaps[j] = Gap::Open {
                                 dip: Some(dip),
                                 mid: Some(c.z),
@@ -633,10 +646,14 @@ pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option
                     }
                     worst = worst.max(pen);
                 } else {
-                    // Sampled path: the move's depth below the CL at the samples and the
-                    // midpoint, normal to the move (the penetration it stands for).
+                    // Sampled path (flat end mill): the move's depth below the CL at the
+                    // samples and the midpoint, vertical. Lowered by δ from touching, the
+                    // cutter penetrates at most δ, and a flat end mill can penetrate that
+                    // much even on a steep move: its bottom may rest on level material
+                    // near the rim while the CL climbs (on mount_rush a 67° move 0.0146 mm
+                    // low cut 0.0125 mm into a level patch; normal to the move, 0.0057).
                     sampled = true;
-                    let g = up.max(mid_dev.unwrap_or(0.0)) / stretch;
+                    let g = up.max(mid_dev.unwrap_or(0.0));
                     if g > chk.accept {
                         return None;
                     }
