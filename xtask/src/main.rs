@@ -7,7 +7,7 @@
 //! cargo xtask bench mem                    load time and peak RSS for a 1M-triangle part
 //! cargo xtask bench plan [--quick] [--cutter SPEC]...    plan vs drop-cutter time, holder share
 //! cargo xtask bench verify [--quick] [--cutter SPEC]...  imprint points/s, verify vs plan time
-//! cargo xtask plan-report [--quick] [--cutter SPEC]...  what planned programs leave, measured
+//! cargo xtask plan-report [--quick] [--cutter SPEC]... [--part PATH]...  what planned programs leave, measured
 //! cargo xtask gen-fixtures                 write fixtures/parts/*.obj
 //! ```
 //!
@@ -38,9 +38,11 @@ commands:
                                              points, holder check (--quick: 1 run)
   bench verify [--quick] [--cutter SPEC]...  imprint points/s; verify time vs plan time
                                              (--quick: 1 run, ball:6 unless --cutter)
-  plan-report [--quick] [--cutter SPEC]...   plan, post, read back and z-map dome.obj and
-                                             sphere_on_plate: gouge (exact) and scallop at
-                                             reachable points (--quick: 0.1 mm grid, else 0.05)
+  plan-report [--quick] [--cutter SPEC]... [--part PATH]...
+                                             plan, post, read back and z-map dome.obj and
+                                             sphere_on_plate (or the given parts): gouge
+                                             (exact) and scallop at reachable points
+                                             (--quick: 0.1 mm grid, else 0.05)
   gen-fixtures                write the analytic test parts into fixtures/parts/
 ";
 
@@ -94,12 +96,28 @@ fn run(args: Vec<String>) -> Result<()> {
         }
         [mem::CHILD, path] => mem::child(path),
         ["plan-report", rest @ ..] => {
-            let (quick, mut cutters) = bench_flags("plan-report", rest)?;
+            // `--part PATH` (repeatable) replaces the default parts.
+            let mut parts = Vec::new();
+            let mut others = Vec::new();
+            let mut it = rest.iter();
+            while let Some(r) = it.next() {
+                if *r == "--part" {
+                    match it.next() {
+                        Some(p) => parts.push(std::path::PathBuf::from(p)),
+                        None => bail!("--part needs a path\n{USAGE}"),
+                    }
+                } else {
+                    others.push(*r);
+                }
+            }
+            let (quick, mut cutters) = bench_flags("plan-report", &others)?;
             if cutters.is_empty() {
                 cutters = planbench::CUTTERS.iter().map(|s| s.to_string()).collect();
             }
-            let parts = planbench::default_parts();
-            planreport::plan_report(&parts[..2], &cutters, if quick { 0.1 } else { 0.05 })
+            if parts.is_empty() {
+                parts = planbench::default_parts()[..2].to_vec();
+            }
+            planreport::plan_report(&parts, &cutters, if quick { 0.1 } else { 0.05 })
         }
         ["gen-fixtures"] => parts::gen_fixtures(&repo_root().join("fixtures/parts")),
         ["help" | "--help" | "-h"] | [] => {
