@@ -188,8 +188,10 @@ pub fn topology_warning(v: &Verification) -> Option<String> {
     (t.misoriented_edges > 0 || t.non_manifold_edges > 0).then(|| {
         format!(
             "warning: the part has {} edges where neighbouring faces disagree on orientation \
-             and {} edges shared by more than two faces; gouges reported next to them may be \
-             the measurement starting outside the material (up to {} mm), not the tool",
+             and {} edges shared by more than two faces; next to them the material side is \
+             unknown, so deviations there are the depth of the surface inside the swept \
+             volume, and a gouge whose vector faces the wrong way can be missed (vectors \
+             reach {} mm into the part)",
             t.misoriented_edges,
             t.non_manifold_edges,
             v.report

@@ -196,6 +196,10 @@ const CREASE_DEG: f64 = 10.0;
 /// (on the open tilted plane a ball hanging over a corner read 0.0146 mm along the normal;
 /// no rim vertex lies deeper than 0.0059 mm inside the swept volume).
 ///
+/// And so is a vertex on a face next to a misoriented or non-manifold edge, where the
+/// material side (the normal's sign and direction) is unknown: there the depth inside the
+/// swept volume, which needs no orientation, is the reading (0 when the vertex is outside).
+///
 /// And so is a smooth vertex whose entry point `p + s·n` lies nearer to some face of the
 /// design than `|s|` (on a plane its own face is exactly `|s|` away): its vector runs under
 /// an edge, where a tool rolling over the edge is met at a glancing angle (on pycam-textbox
@@ -208,6 +212,7 @@ fn crease_depths(
     exact: Option<(&[&SweepModel], &Toolpath)>,
     open: bool,
     part: &TriangleBvh,
+    unoriented: &[bool],
 ) {
     let mut cos_min = vec![1.0f64; refined.positions.len()];
     // The rim of an open mesh: vertices on an edge of one face.
@@ -248,7 +253,7 @@ fn crease_depths(
         // to its own face sees a crease's glancing geometry too: its vector runs under an
         // edge within that distance.
         let entry = refined.positions[i] + s * refined.normals[i];
-        if !sharp(i) && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none() {
+        if !sharp(i) && !unoriented[i] && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none() {
             continue;
         }
         let first_order = s * m.facing[i].abs().min(1.0);
@@ -258,7 +263,15 @@ fn crease_depths(
             }
             _ => 0.0,
         };
-        d.signed_mm = Some(if depth > 0.0 { -depth } else { first_order });
+        d.signed_mm = Some(if depth > 0.0 {
+            -depth
+        } else if unoriented[i] && exact.is_some() {
+            // The vertex is not inside the volume: with the material side unknown, the
+            // reading along the normal is not evidence of a gouge.
+            0.0
+        } else {
+            first_order
+        });
     }
 }
 
@@ -326,7 +339,16 @@ pub fn verify(
     // reads as a gouge. The bisector points into the material.
     rcfg.crease_angle_deg = 180.0;
     let refined = refine::refine(part, &rcfg)?;
-    let topology = refine::topology(part);
+    let (topology, unoriented_tris) = refine::topology_and_unoriented(part);
+    // Refined vertices on a face next to a misoriented or non-manifold edge.
+    let mut unoriented = vec![false; refined.len()];
+    for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
+        if unoriented_tris[src as usize] {
+            for &i in t {
+                unoriented[i as usize] = true;
+            }
+        }
+    }
     timings.refine_s = t.elapsed().as_secs_f64();
 
     let t = Instant::now();
@@ -345,6 +367,7 @@ pub fn verify(
         exact,
         topology.boundary_edges > 0,
         &part_bvh,
+        &unoriented,
     );
     timings.measure_s = t.elapsed().as_secs_f64();
 

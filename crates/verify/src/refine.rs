@@ -203,6 +203,12 @@ impl Topology {
 
 /// Counts the boundary, non-manifold and misoriented edges of `mesh` (see [`Topology`]).
 pub fn topology(mesh: &Mesh) -> Topology {
+    topology_and_unoriented(mesh).0
+}
+
+/// [`topology`], and per design triangle (in `Mesh::triangles` order) whether one of its
+/// edges is non-manifold or misoriented: there the material side is unknown.
+pub fn topology_and_unoriented(mesh: &Mesh) -> (Topology, Vec<bool>) {
     let (_, tris) = weld(mesh);
     // Per undirected edge: uses, and uses running from the lower to the higher index.
     let mut uses: IntMap<u64, (u32, u32)> = IntMap::default();
@@ -226,7 +232,15 @@ pub fn topology(mesh: &Mesh) -> Topology {
             _ => topo.non_manifold_edges += 1,
         }
     }
-    topo
+    let bad = |a: u32, b: u32| {
+        uses.get(&edge_key(a, b))
+            .is_some_and(|&(n, forward)| n > 2 || (n == 2 && forward != 1))
+    };
+    let unoriented = tris
+        .iter()
+        .map(|t| (0..3).any(|k| t[k] != t[(k + 1) % 3] && bad(t[k], t[(k + 1) % 3])))
+        .collect();
+    (topo, unoriented)
 }
 
 fn estimate_vertices(area_mm2: f64, s: f64) -> usize {

@@ -147,3 +147,41 @@ fn a_thin_fin_is_not_gouged_through_from_the_far_side() {
         v.report.worst_gouges.first()
     );
 }
+
+/// The block with its top face flipped (normals into the material, misoriented edges at
+/// its sides): along those vertices' normals the vectors start inside the ball and read
+/// false gouges of up to `L_in`. Where orientation is unknown the reading is the vertex's
+/// depth in the swept volume: none for a ball tangent to the top, and never more than the
+/// true 0.05 mm for a ball 0.05 mm low (a vector facing the wrong way may also see nothing:
+/// the limit `cam verify` warns about for such meshes).
+#[test]
+fn a_flipped_face_reads_depths_not_false_gouges() {
+    let cutter = Cutter::ball(6.0).unwrap();
+    let block = block();
+    let flipped: Vec<Triangle> = block
+        .triangles()
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            if k < 2 {
+                Triangle::new(t.v[0], t.v[2], t.v[1])
+            } else {
+                *t
+            }
+        })
+        .collect();
+    let part = Mesh::from_triangles(flipped, "<flipped>").unwrap();
+    for (z, most) in [(0.0, 0.0), (-0.05, 0.05)] {
+        let mut cfg = VerifyConfig::new(0.01);
+        cfg.resolution_mm = 0.02;
+        cfg.sweep.inserts = 160;
+        let v = verify(&part, &pass(-10.0, z), &cutter, &cfg).expect("verify");
+        assert!(v.topology.misoriented_edges > 0);
+        let g = v.report.max_gouge_mm;
+        assert!(
+            g <= most + 1e-6,
+            "tip z {z}: max gouge {g}, at most {most}, worst {:?}",
+            v.report.worst_gouges.first()
+        );
+    }
+}
