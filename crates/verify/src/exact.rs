@@ -152,6 +152,40 @@ fn first_root_convex(
     Some((s, g))
 }
 
+/// The first `s ∈ [line.lo, line.hi]` where `line` is inside the cylinder of radius `radius`
+/// and half-height `half` about centre `c` and axis `k` (a bound of the puck at `c`: radius
+/// `a + r`, half-height `r`), or `None`. Closed form: a slab and a quadratic.
+pub fn cylinder_entry(line: &Line, c: DVec3, k: DVec3, radius: f64, half: f64) -> Option<f64> {
+    let (m, n) = (line.o - c, line.n);
+    let (mk, nk) = (m.dot(k), n.dot(k));
+    let (mut lo, mut hi) = (line.lo, line.hi);
+    if nk != 0.0 {
+        let (a, b) = ((-half - mk) / nk, (half - mk) / nk);
+        lo = lo.max(a.min(b));
+        hi = hi.min(a.max(b));
+    } else if mk.abs() > half {
+        return None;
+    }
+    let (mp, np) = (m - mk * k, n - nk * k);
+    let (qa, qb, qc) = (
+        np.length_squared(),
+        mp.dot(np),
+        mp.length_squared() - radius * radius,
+    );
+    if qa > 1e-300 {
+        let disc = qb * qb - qa * qc;
+        if disc.is_nan() || disc < 0.0 {
+            return None;
+        }
+        let sq = disc.sqrt();
+        lo = lo.max((-qb - sq) / qa);
+        hi = hi.min((-qb + sq) / qa);
+    } else if qc > 0.0 {
+        return None;
+    }
+    (lo <= hi).then_some(lo)
+}
+
 /// First entry of `line` into the puck at torus centre `c`, axis `k`.
 pub fn puck_entry(line: &Line, puck: &Puck, c: DVec3, k: DVec3) -> Option<Entry> {
     let f = |s: f64| {
@@ -243,6 +277,15 @@ pub fn capsule_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry>
 /// derivative `−g·d` is continuous and non-decreasing where the distance is positive.
 fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3) -> (f64, DVec3, f64) {
     let at = |u: f64| puck.disk_distance(y - u * d, k);
+    // A level move (d ⟂ k): the axial offset is the same for every u and the distance
+    // grows with the radial one, so the minimiser is the nearest point of the segment in
+    // the disk's plane.
+    let dd = d.length_squared();
+    if d.dot(k) == 0.0 && dd > 0.0 {
+        let u = ((y - y.dot(k) * k).dot(d) / dd).clamp(0.0, 1.0);
+        let (dist, g) = at(u);
+        return (dist, g, u);
+    }
     let slope = |g: DVec3| -g.dot(d);
     let (d0, g0) = at(0.0);
     if slope(g0) >= 0.0 || d0 == 0.0 {
@@ -457,7 +500,19 @@ pub fn convex_translation_entry(
         let (dist, g, _) = segment_disk_min(puck, line.at(s) - c0, d, k);
         (dist - puck.r, g)
     };
-    first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
+    // The swept puck lies inside the capsule of radius a + r about the centres' segment:
+    // a line that misses it misses the puck, and one that enters it does so no later than
+    // it enters the puck, so Newton (monotone from the left of the first root) starts there.
+    let outer = capsule_entry(line, c0, c1, puck.a + puck.r)?;
+    // Start just before the capsule so the first iterate is outside with a usable gradient;
+    // if even that point is on the puck, search from the line's start as before.
+    let s0 = (outer.s - 1e-6).max(line.lo);
+    let start = if s0 > line.lo && f(s0).0 > ROOT_TOL_MM {
+        s0
+    } else {
+        line.lo
+    };
+    first_root_convex(start, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
 /// A toolpath move as the refinement sees it: tip and axis at both ends, cutter radii.

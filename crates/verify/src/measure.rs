@@ -808,6 +808,14 @@ fn measure_vectors(
                     match model.pieces[pi as usize] {
                         Piece::Cap { frame, mv } => {
                             let k = model.frames[frame as usize].axis;
+                            // The puck lies in the cylinder of radius a + r, half-height
+                            // r about its torus centre: much tighter than the bounding
+                            // sphere along the axis (a tool resting on a face).
+                            let bound =
+                                crate::exact::cylinder_entry(&seg, c, k, puck.a + puck.r, puck.r);
+                            if bound.is_none_or(|s| s > hi) {
+                                return hi;
+                            }
                             let pose = cam_core::Pose {
                                 tip: c - puck.r * k,
                                 axis: k,

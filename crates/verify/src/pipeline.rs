@@ -391,6 +391,8 @@ pub fn verify(
         },
     );
     extra.insert("refined_vectors".to_string(), m.stats.refined as f64);
+    extra.insert("exact_refinements".to_string(), m.stats.refinements as f64);
+    extra.insert("crossed_vectors".to_string(), m.stats.crossed as f64);
     extra.insert("thin_material_vectors".to_string(), inner.thin as f64);
     extra.insert("open_above_vectors".to_string(), inner.open_above as f64);
     extra.insert("boundary_edges".to_string(), topology.boundary_edges as f64);

@@ -194,3 +194,99 @@ fn disk_translation_equals_newton_and_brute_force() {
     );
     assert!(worst_brute < 0.05, "brute force off by {worst_brute} mm");
 }
+
+/// `cylinder_entry` (the caps' tight bound) against a fine sampling of each line: the first
+/// sample inside is never before the closed form's entry, and at most one step after it.
+#[test]
+fn cylinder_entry_matches_sampling() {
+    let mut rng = Lcg(0xc71d_e4e7);
+    let (mut hits, n) = (0, 20_000);
+    for _ in 0..2000 {
+        let (c, k) = (
+            DVec3::new(
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            ),
+            rng.unit(),
+        );
+        let (radius, half) = (rng.range(0.5, 3.0), rng.range(0.1, 2.0));
+        let o = c + DVec3::new(
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+            rng.range(-5.0, 5.0),
+        );
+        let line = Line {
+            o,
+            n: rng.unit(),
+            lo: -2.0,
+            hi: 8.0,
+        };
+        let inside = |s: f64| {
+            let m = line.o + s * line.n - c;
+            let z = m.dot(k);
+            z.abs() <= half && (m - z * k).length() <= radius
+        };
+        let step = (line.hi - line.lo) / n as f64;
+        let sampled = (0..=n)
+            .map(|i| line.lo + i as f64 * step)
+            .find(|&s| inside(s));
+        let exact = cam_verify::exact::cylinder_entry(&line, c, k, radius, half);
+        match (exact, sampled) {
+            (Some(e), Some(s)) => {
+                hits += 1;
+                assert!(
+                    s >= e - 1e-9 && s <= e + step + 1e-9,
+                    "entry {e}, sampled {s}"
+                );
+            }
+            (None, Some(s)) => panic!("sampled entry {s} missed by the closed form"),
+            // The closed form may see a graze shorter than the step.
+            (Some(e), None) => assert!(inside(e) || inside(e + 1e-9), "entry {e} not inside"),
+            (None, None) => {}
+        }
+    }
+    assert!(hits > 200, "only {hits} lines enter");
+}
+
+/// A bull's translation entry on level moves (the closed-form minimiser over the move)
+/// against a brute force over tool instances.
+#[test]
+fn level_bull_translation_matches_instances() {
+    let mut rng = Lcg(0x1e7e_1b11);
+    let puck = Puck { a: 1.5, r: 1.5 };
+    let mut hits = 0;
+    for _ in 0..1500 {
+        let k = DVec3::Z;
+        let c0 = DVec3::new(rng.range(-2.0, 2.0), rng.range(-2.0, 2.0), 0.0);
+        let c1 = c0 + DVec3::new(rng.range(-4.0, 4.0), rng.range(-4.0, 4.0), 0.0);
+        let o = DVec3::new(
+            rng.range(-6.0, 6.0),
+            rng.range(-6.0, 6.0),
+            rng.range(-4.0, 4.0),
+        );
+        let line = Line {
+            o,
+            n: rng.unit(),
+            lo: -3.0,
+            hi: 6.0,
+        };
+        let e = convex_translation_entry(&line, &puck, c0, c1, k);
+        let b = (0..=4000)
+            .filter_map(|i| puck_entry(&line, &puck, c0.lerp(c1, i as f64 / 4000.0), k))
+            .map(|x| x.s)
+            .min_by(f64::total_cmp);
+        match (e, b) {
+            (Some(e), Some(b)) => {
+                hits += 1;
+                // Instances |d|/4000 apart: the brute force is never below the entry and
+                // above it by at most what that gap allows along a grazing line.
+                assert!(b >= e.s - 1e-9, "brute {b} below entry {}", e.s);
+                assert!(b - e.s < 0.05, "brute {b} far above entry {}", e.s);
+            }
+            (None, Some(b)) => panic!("instances hit at {b}, the sweep misses"),
+            _ => {}
+        }
+    }
+    assert!(hits > 300, "only {hits} hits");
+}
