@@ -114,7 +114,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     if a.json {
         println!("{report}");
     } else {
-        eprintln!("{}", summary_line(&v, a.tolerance));
+        eprintln!("cam {}", summary_line(&v, a.tolerance));
         if let Some(w) = topology_warning(&v) {
             eprintln!("cam verify: {w}");
         }
@@ -215,12 +215,17 @@ pub fn summary_line(v: &Verification, tol: f64) -> String {
         )
     });
     format!(
-        "verify: max gouge {:.4} mm{worst}, max excess {:.4} mm, {} of {} points within ±{tol} mm, {} unmachined; {:.1} s",
+        "verify: max gouge {:.4} mm{worst}, max excess {:.4} mm, {} of {} measured points within \
+         ±{tol} mm; {} points beyond the cutter's reach (over {} mm of material, or faces the \
+         path never approaches such as a part's sides and bottom); {:.1} s",
         r.max_gouge_mm,
         r.max_excess_mm,
         r.tolerance_counts.within,
         r.measured,
         r.unmachined,
+        r.settings
+            .as_ref()
+            .map_or(f64::NAN, |s| s.deviation.outside_mm),
         v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s
     )
 }
