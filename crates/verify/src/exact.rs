@@ -94,7 +94,9 @@ impl Puck {
             (d, g)
         } else {
             let e = rho - self.a;
-            let d = e.hypot(z);
+            // Not `hypot`: lengths here are mm-sized (no overflow), and libm's hypot costs
+            // several times a square root in this innermost loop.
+            let d = (e * e + z * z).sqrt();
             if d > 0.0 {
                 (d, (e / rho * h + z * k) / d)
             } else {
