@@ -283,6 +283,7 @@ fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3) -> (f64, DVec3, f
     // grows with the radial one, so the minimiser is the nearest point of the segment in
     // the disk's plane.
     let dd = d.length_squared();
+    let dl = dd.sqrt();
     if d.dot(k) == 0.0 && dd > 0.0 {
         let u = ((y - y.dot(k) * k).dot(d) / dd).clamp(0.0, 1.0);
         let (dist, g) = at(u);
@@ -338,7 +339,9 @@ fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3) -> (f64, DVec3, f
             }
             side = -1;
         }
-        if b - a <= 1e-15 {
+        // The bracket in mm along the move: the distance found is within |d|·(b − a) of
+        // the minimum (its slope is at most |d|), so 1e-13 mm is below every tolerance.
+        if (b - a) * dl <= 1e-13 {
             break;
         }
     }
