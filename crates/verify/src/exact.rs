@@ -505,19 +505,7 @@ pub fn convex_translation_entry(
         let (dist, g, _) = segment_disk_min(puck, line.at(s) - c0, d, k);
         (dist - puck.r, g)
     };
-    // The swept puck lies inside the capsule of radius a + r about the centres' segment:
-    // a line that misses it misses the puck, and one that enters it does so no later than
-    // it enters the puck, so Newton (monotone from the left of the first root) starts there.
-    let outer = capsule_entry(line, c0, c1, puck.a + puck.r)?;
-    // Start just before the capsule so the first iterate is outside with a usable gradient;
-    // if even that point is on the puck, search from the line's start as before.
-    let s0 = (outer.s - 1e-6).max(line.lo);
-    let start = if s0 > line.lo && f(s0).0 > ROOT_TOL_MM {
-        s0
-    } else {
-        line.lo
-    };
-    first_root_convex(start, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
+    first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
 /// A toolpath move as the refinement sees it: tip and axis at both ends, cutter radii.
