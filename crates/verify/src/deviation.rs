@@ -191,6 +191,11 @@ impl TriangleBvh {
         }
     }
 
+    /// The box around every triangle (`min`, `max`, mm); `None` when empty.
+    pub fn bounds(&self) -> Option<(DVec3, DVec3)> {
+        (!self.tris.is_empty()).then(|| (self.nodes[0].min, self.nodes[0].max))
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.tris.len()

@@ -64,14 +64,15 @@ pub fn inner_lengths(
     closed: bool,
 ) -> InnerLengths {
     let all: Vec<usize> = (0..refined.len()).collect();
-    inner_lengths_at(part, refined, &all, inside_mm, three_axis, closed)
+    let bvh = TriangleBvh::new(part.triangles());
+    inner_lengths_at(&bvh, refined, &all, inside_mm, three_axis, closed)
 }
 
 /// [`inner_lengths`] for the vertices `idx` of `refined` only (`inner_mm[k]` is vertex
-/// `idx[k]`'s): one ray cast per vertex, so callers pass the vertices whose reading
-/// depends on it (the gouges).
+/// `idx[k]`'s), against the part's triangles in `bvh`: one ray cast per vertex, so callers
+/// pass the vertices whose reading depends on it (the gouges).
 pub fn inner_lengths_at(
-    part: &Mesh,
+    bvh: &TriangleBvh,
     refined: &RefinedMesh,
     idx: &[usize],
     inside_mm: f64,
@@ -80,9 +81,8 @@ pub fn inner_lengths_at(
 ) -> InnerLengths {
     // A closed, consistently oriented mesh's inner rays always meet it again: no long rays.
     let open_sky = three_axis && !closed;
-    let bvh = TriangleBvh::new(part.triangles());
-    let b = part.bounds();
-    let reach = (b.max - b.min).length() + 1.0;
+    // Longer than any segment inside the part.
+    let reach_mm = bvh.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length()) + 1.0;
     let out: Vec<(f64, u8)> = idx
         .par_iter()
         .map(|&i| {
@@ -98,7 +98,7 @@ pub fn inner_lengths_at(
             // has no face above it, neither has the rest: sky.
             if open_sky
                 && bvh
-                    .lowest_hit(p - len * n, DVec3::Z, 0.0, reach, |_| true)
+                    .lowest_hit(p - len * n, DVec3::Z, 0.0, reach_mm, |_| true)
                     .is_none()
             {
                 (0.0, 2)

@@ -232,7 +232,7 @@ impl Refiner<'_> {
     /// True when [`Refiner::refine`] answers `c` exactly (a cap, or a strip of a
     /// translation: closed forms, or a root search on a convex distance that cannot miss),
     /// so that finding no entry means the line misses that volume.
-    fn is_closed_form(&self, c: &Crossing) -> bool {
+    fn answers_exactly(&self, c: &Crossing) -> bool {
         let model = self.models[c.model as usize];
         match model.pieces[unkey(c.key).0] {
             Piece::Cap { .. } => true,
@@ -766,7 +766,7 @@ fn measure_vectors(
                             p => p,
                         };
                         better(e, mv, (c.model, c.key), src, &mut best);
-                    } else if !rf.is_closed_form(c) {
+                    } else if !rf.answers_exactly(c) {
                         inconclusive = true;
                     }
                     // A translation's neighbours at the step's ends: near a joint the other

@@ -116,7 +116,7 @@ impl Verification {
 /// the tolerance are checked: a vector's reading changes only when its entry lies deeper
 /// than its clipped length, and shallower readings are within tolerance either way.
 fn clip_to_material(
-    part: &Mesh,
+    part_bvh: &TriangleBvh,
     refined: &RefinedMesh,
     models: &[&SweepModel],
     toolpath: &Toolpath,
@@ -135,7 +135,7 @@ fn clip_to_material(
         return Ok(material::InnerLengths::default());
     }
     let inner = material::inner_lengths_at(
-        part,
+        part_bvh,
         refined,
         &gouges,
         cfg.deviation.inside_mm,
@@ -216,23 +216,11 @@ fn crease_depths(
 ) {
     let mut cos_min = vec![1.0f64; refined.positions.len()];
     // The rim of an open mesh: vertices on an edge of one face.
-    let mut on_rim = vec![false; refined.positions.len()];
-    if open {
-        let mut uses: std::collections::HashMap<(u32, u32), u32> =
-            std::collections::HashMap::with_capacity(3 * refined.triangles.len() / 2);
-        for t in &refined.triangles {
-            for k in 0..3 {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                *uses.entry((a.min(b), a.max(b))).or_insert(0) += 1;
-            }
-        }
-        for (&(a, b), &n) in &uses {
-            if n == 1 {
-                on_rim[a as usize] = true;
-                on_rim[b as usize] = true;
-            }
-        }
-    }
+    let on_rim = if open {
+        refine::rim_vertices(refined)
+    } else {
+        vec![false; refined.positions.len()]
+    };
     for t in &refined.triangles {
         let [a, b, c] = t.map(|i| refined.positions[i as usize]);
         let Some(nf) = (b - a).cross(c - a).try_normalize() else {
@@ -356,10 +344,13 @@ pub fn verify(
     models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
     // Inner vector lengths clipped to the material (thin walls, skins open to the sky).
     let mut m = measure::measure(&refined, &models, toolpath, &cfg.deviation, cfg.surface)?;
-    let inner = clip_to_material(part, &refined, &models, toolpath, cfg, &topology, &mut m)?;
+    // The part's triangles, for the vectors' material checks and the depths at edges.
+    let part_bvh = TriangleBvh::new(part.triangles());
+    let inner = clip_to_material(
+        &part_bvh, &refined, &models, toolpath, cfg, &topology, &mut m,
+    )?;
     let mut devs = m.deviations.clone();
     let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));
-    let part_bvh = TriangleBvh::new(part.triangles());
     crease_depths(
         &refined,
         &mut devs,

@@ -201,18 +201,11 @@ impl Topology {
     }
 }
 
-/// Counts the boundary, non-manifold and misoriented edges of `mesh` (see [`Topology`]).
-pub fn topology(mesh: &Mesh) -> Topology {
-    topology_and_unoriented(mesh).0
-}
-
-/// [`topology`], and per design triangle (in `Mesh::triangles` order) whether one of its
-/// edges is non-manifold or misoriented: there the material side is unknown.
-pub fn topology_and_unoriented(mesh: &Mesh) -> (Topology, Vec<bool>) {
-    let (_, tris) = weld(mesh);
-    // Per undirected edge: uses, and uses running from the lower to the higher index.
+/// Per undirected edge (by [`edge_key`]): how many faces use it, and how many of those run
+/// along it from the lower to the higher vertex index.
+fn edge_uses(tris: &[[u32; 3]]) -> IntMap<u64, (u32, u32)> {
     let mut uses: IntMap<u64, (u32, u32)> = IntMap::default();
-    for t in &tris {
+    for t in tris {
         for k in 0..3 {
             let (a, b) = (t[k], t[(k + 1) % 3]);
             if a == b {
@@ -223,6 +216,31 @@ pub fn topology_and_unoriented(mesh: &Mesh) -> (Topology, Vec<bool>) {
             e.1 += u32::from(a < b);
         }
     }
+    uses
+}
+
+/// The vertices of `refined` on its rim: on an edge used by one face only.
+pub fn rim_vertices(refined: &RefinedMesh) -> Vec<bool> {
+    let mut rim = vec![false; refined.positions.len()];
+    for (&key, &(n, _)) in &edge_uses(&refined.triangles) {
+        if n == 1 {
+            rim[(key >> 32) as usize] = true;
+            rim[(key & 0xffff_ffff) as usize] = true;
+        }
+    }
+    rim
+}
+
+/// Counts the boundary, non-manifold and misoriented edges of `mesh` (see [`Topology`]).
+pub fn topology(mesh: &Mesh) -> Topology {
+    topology_and_unoriented(mesh).0
+}
+
+/// [`topology`], and per design triangle (in `Mesh::triangles` order) whether one of its
+/// edges is non-manifold or misoriented: there the material side is unknown.
+pub fn topology_and_unoriented(mesh: &Mesh) -> (Topology, Vec<bool>) {
+    let (_, tris) = weld(mesh);
+    let uses = edge_uses(&tris);
     let mut topo = Topology::default();
     for &(n, forward) in uses.values() {
         match n {
@@ -587,5 +605,22 @@ mod tests {
             ),
             (2, 1, 0)
         );
+    }
+
+    #[test]
+    fn rim_vertices_are_those_on_one_face_edges() {
+        let mesh_of = |triangles: Vec<[u32; 3]>, n: usize| RefinedMesh {
+            positions: vec![DVec3::ZERO; n],
+            normals: vec![DVec3::Z; n],
+            face_source: vec![0; triangles.len()],
+            triangles,
+            max_edge_mm: 1.0,
+        };
+        // A fan of three faces about vertex 0 (closed around it): 0 is inside, 1..=3 rim.
+        let fan = mesh_of(vec![[0, 1, 2], [0, 2, 3], [0, 3, 1]], 4);
+        assert_eq!(rim_vertices(&fan), vec![false, true, true, true]);
+        // Closed tetrahedron: no rim.
+        let tet = mesh_of(vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], 4);
+        assert_eq!(rim_vertices(&tet), vec![false; 4]);
     }
 }

@@ -314,15 +314,9 @@ fn root_increasing(g: impl Fn(f64) -> f64, lo: f64, hi: f64) -> f64 {
 
 const BAND_ROWS: usize = 32;
 
-/// Sweeps `cutter` along every move of `toolpath` (rapids included) over the grid of `cfg`.
-/// Parallel over rows; the result is identical for any number of threads.
-///
-/// # Errors
-/// [`ZmapError::BadGrid`], [`ZmapError::NotVertical`] (axis differs from +Z by more than
-/// 1e-9), [`ZmapError::NonFinite`].
-pub fn machine(toolpath: &Toolpath, cutter: &Cutter, cfg: &ZmapConfig) -> Result<Zmap, ZmapError> {
-    let g = cfg.grid;
-    g.validate()?;
+/// The moves of `toolpath` as tip segments (the first move's start is its own pose),
+/// checked to be 3-axis and finite.
+fn segments(toolpath: &Toolpath) -> Result<Vec<(DVec3, DVec3)>, ZmapError> {
     for (index, mv) in toolpath.moves.iter().enumerate() {
         if (mv.pose.axis - DVec3::Z).length() > 1e-9 {
             return Err(ZmapError::NotVertical {
@@ -337,9 +331,7 @@ pub fn machine(toolpath: &Toolpath, cutter: &Cutter, cfg: &ZmapConfig) -> Result
             });
         }
     }
-    let prof = Profile::new(cutter);
-    let rr = prof.big_r;
-    let segs: Vec<(DVec3, DVec3)> = toolpath
+    Ok(toolpath
         .moves
         .iter()
         .enumerate()
@@ -351,7 +343,21 @@ pub fn machine(toolpath: &Toolpath, cutter: &Cutter, cfg: &ZmapConfig) -> Result
             };
             (a, mv.pose.tip)
         })
-        .collect();
+        .collect())
+}
+
+/// Sweeps `cutter` along every move of `toolpath` (rapids included) over the grid of `cfg`.
+/// Parallel over rows; the result is identical for any number of threads.
+///
+/// # Errors
+/// [`ZmapError::BadGrid`], [`ZmapError::NotVertical`] (axis differs from +Z by more than
+/// 1e-9), [`ZmapError::NonFinite`].
+pub fn machine(toolpath: &Toolpath, cutter: &Cutter, cfg: &ZmapConfig) -> Result<Zmap, ZmapError> {
+    let g = cfg.grid;
+    g.validate()?;
+    let segs = segments(toolpath)?;
+    let prof = Profile::new(cutter);
+    let rr = prof.big_r;
     // Moves per band of rows they may reach, in move order.
     let nbands = g.ny.div_ceil(BAND_ROWS);
     let mut bands: Vec<Vec<u32>> = vec![Vec::new(); nbands];
@@ -442,35 +448,9 @@ pub fn heights_at(
     cutter: &Cutter,
     points: &[(f64, f64)],
 ) -> Result<Vec<Option<(f64, u32)>>, ZmapError> {
-    for (index, mv) in toolpath.moves.iter().enumerate() {
-        if (mv.pose.axis - DVec3::Z).length() > 1e-9 {
-            return Err(ZmapError::NotVertical {
-                index,
-                axis: mv.pose.axis,
-            });
-        }
-        if !mv.pose.tip.is_finite() {
-            return Err(ZmapError::NonFinite {
-                index,
-                tip: mv.pose.tip,
-            });
-        }
-    }
+    let segs = segments(toolpath)?;
     let prof = Profile::new(cutter);
     let rr = prof.big_r;
-    let segs: Vec<(DVec3, DVec3)> = toolpath
-        .moves
-        .iter()
-        .enumerate()
-        .map(|(i, mv)| {
-            let a = if i == 0 {
-                mv.pose.tip
-            } else {
-                toolpath.moves[i - 1].pose.tip
-            };
-            (a, mv.pose.tip)
-        })
-        .collect();
     if segs.is_empty() {
         return Ok(vec![None; points.len()]);
     }
