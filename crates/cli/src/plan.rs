@@ -389,6 +389,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
         "planned_tolerance_mm": cfg.tolerance_mm, "rounding_mm": rounding,
         "sampled_moves": plan.sampled_moves,
         "predicted_max_scallop_mm": plan.predicted_max_scallop_mm,
+        "steep_limited_points": plan.steep_limited_points,
+        "floor_limited_passes": plan.floor_limited_passes,
         "unresolved_joins": plan.unresolved_joins,
         "drops": plan.drops,
         "safe_z_mm": plan.safe_z_mm,
@@ -405,8 +407,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
     } else {
         eprintln!(
             "cam plan: {} passes, {} CL points, cut {:.0} mm, rapid {:.0} mm, ~{:.1} min; \
-             penetration and excess ≤ {:.4} mm (τ {}{}), scallop ≤ {:.4} mm (h {}); holder: {} \
-             collisions, minimum stick-out {} -> {}",
+             penetration and excess ≤ {:.4} mm (τ {}{}), scallop ≤ {:.4} mm predicted (h {}{}); \
+             holder: {} collisions, minimum stick-out {} -> {}",
             plan.passes,
             plan.cl_points,
             cut_len,
@@ -421,6 +423,15 @@ pub fn run(a: PlanArgs) -> Result<()> {
             },
             plan.predicted_max_scallop_mm,
             a.scallop,
+            if plan.floor_limited_passes > 0 {
+                format!(
+                    ", above h after {} passes at the step floor: steep walls or rows tangent \
+                     to a concave crease",
+                    plan.floor_limited_passes
+                )
+            } else {
+                String::new()
+            },
             report.collisions.len(),
             fmt_stick(&stick),
             a.output.display()

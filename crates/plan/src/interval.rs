@@ -131,11 +131,14 @@ pub(crate) fn needed(
             rho = f64::INFINITY;
         }
         let spacing = behind.map_or(dv, |(_, dvb)| dv.max(dvb));
-        if rho < 0.0 && -rho < CREASE_SPACINGS * spacing {
+        let w = model.xy_interval(p, q, rho);
+        // A concave circle the model cannot fit a step into even at the floor (steep across
+        // the passes, where the section's chord is long) is measured too: the model's
+        // scallop there is the cutter's whole radius, not what the passes leave.
+        if rho < 0.0 && (-rho < CREASE_SPACINGS * spacing || w < floor) {
             creases.push((u, z, z1, p, q));
             continue;
         }
-        let w = model.xy_interval(p, q, rho);
         if w < floor {
             need.steep += 1;
         }

@@ -91,6 +91,10 @@ pub struct Plan {
     /// ([`STEEP_FLOOR_FRACTION`] of a ball's flat-ground step) on a CL surface steeper than
     /// about 89° across the passes; the scallop there may exceed h.
     pub steep_limited_points: usize,
+    /// Passes whose interval to the next pass reached the floor with a predicted scallop
+    /// still above h (by more than [`VERIFY_SLACK`]): steep CL walls, or passes running
+    /// nearly tangent to a concave crease the cutter cannot reach into.
+    pub floor_limited_passes: usize,
     /// Links that followed the surface.
     pub surface_links: usize,
     /// Retract–rapid–plunge sequences between runs.
@@ -117,6 +121,7 @@ struct PassPlan {
     v: f64,
     predicted: f64,
     steep: usize,
+    floor_limited: bool,
 }
 
 /// A pass's profile and its marched runs.
@@ -329,6 +334,7 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
                 v,
                 predicted: 0.0,
                 steep: 0,
+                floor_limited: false,
             });
             marched.push(cur.marched);
             break;
@@ -438,6 +444,7 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
             v,
             predicted,
             steep: need.steep,
+            floor_limited: predicted > h * (1.0 + VERIFY_SLACK),
         });
         report(dv);
         // Next prediction: what the model allowed here (less the jitter margin), growing at
@@ -480,6 +487,7 @@ fn assemble(
     let mut unresolved_dev = 0.0f64;
     let mut predicted = 0.0f64;
     let mut steep = 0;
+    let mut floor_limited = 0;
     let mut sampled_moves = 0;
     // Runs of each cutting pass as 3-D tool tips, in increasing u.
     let mut cutting: Vec<(f64, Vec<Vec<DVec3>>)> = Vec::new();
@@ -489,6 +497,7 @@ fn assemble(
         unresolved_dev = unresolved_dev.max(m.unresolved_dev);
         predicted = predicted.max(p.predicted);
         steep += p.steep;
+        floor_limited += usize::from(p.floor_limited);
         sampled_moves += m.sampled_moves;
         let runs: Vec<Vec<DVec3>> = m
             .runs
@@ -608,6 +617,7 @@ fn assemble(
         unresolved_deviation_mm: unresolved_dev,
         predicted_max_scallop_mm: predicted,
         steep_limited_points: steep,
+        floor_limited_passes: floor_limited,
         surface_links,
         retracts,
         check_spacing_mm: chk.spacing,

@@ -249,3 +249,31 @@ fn tilted_plane_obj_side_step_is_cos_theta_and_scallop_is_h() {
     assert!(r.max_gouge_mm < 1e-9, "gouge {}", r.max_gouge_mm);
     cam_core::assert_near!(r.max_scallop_mm, 0.01, 1e-6);
 }
+
+/// Passes over the dome's foot with a bull: the CL surface there is a steep concave fillet
+/// (the torus rolling in the corner of the dome and the plate), so tight across the passes
+/// that the model could fit no step even at the floor and predicted the cutter's whole
+/// radius (2.98 mm for h = 0.05). Such points are measured between the passes instead.
+#[test]
+fn dome_foot_bull_scallop_is_measured_not_the_cutter_radius() {
+    let mesh = Mesh::load(workspace().join("fixtures/parts/dome.obj"), Units::Mm).unwrap();
+    let cfg = PlanConfig {
+        cutter: "bull:6:1.5".parse().unwrap(),
+        tolerance_mm: 0.01,
+        scallop_mm: 0.05,
+        boundary: Some((-12.0, 12.0, -23.0, -17.0)),
+        ..PlanConfig::default()
+    };
+    let p = plan_part(&mesh, &cfg, None).unwrap();
+    eprintln!(
+        "dome foot bull: passes {} predicted scallop {:.4} floor-limited passes {} steep points {}",
+        p.passes, p.predicted_max_scallop_mm, p.floor_limited_passes, p.steep_limited_points
+    );
+    assert!(
+        p.predicted_max_scallop_mm < 2.0 * cfg.scallop_mm,
+        "predicted {}",
+        p.predicted_max_scallop_mm
+    );
+    let above = p.predicted_max_scallop_mm > cfg.scallop_mm * (1.0 + cam_plan::VERIFY_SLACK);
+    assert_eq!(above, p.floor_limited_passes > 0);
+}
