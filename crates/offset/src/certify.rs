@@ -194,7 +194,7 @@ impl DropCutter {
 
 /// Squared XY distance from the segment `a → b` to the rectangle `(x0, y0, x1, y1)`;
 /// 0 if they meet.
-fn seg_rect_dist2(a: (f64, f64), b: (f64, f64), r: (f64, f64, f64, f64)) -> f64 {
+pub(crate) fn seg_rect_dist2(a: (f64, f64), b: (f64, f64), r: (f64, f64, f64, f64)) -> f64 {
     let inside = |p: (f64, f64)| p.0 >= r.0 && p.0 <= r.2 && p.1 >= r.1 && p.1 <= r.3;
     if inside(a) || inside(b) {
         return 0.0;

@@ -19,7 +19,7 @@ pub(crate) struct Tri {
     pub(crate) lo: [f64; 2],
     pub(crate) hi: [f64; 2],
     /// Index in the mesh.
-    orig: u32,
+    pub(crate) orig: u32,
     /// Bit k (k < 3): this triangle tests edge k (v[k] → v[k+1]); bit 3 + k: it tests
     /// vertex k. A shared edge or vertex is tested by the first triangle (in descending top
     /// order) that has it, which is never pruned after one that also has it.

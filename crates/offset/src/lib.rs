@@ -6,11 +6,13 @@
 //! torus–edge contact by a safeguarded Newton iteration converged to < 1e-12 mm).
 
 mod certify;
+mod chord;
 mod contact;
 mod grid;
 mod index;
 
 pub use certify::{COPLANAR_MM, PlaneCertificate};
+pub use chord::ChordRise;
 pub use contact::{Contact, ContactKind};
 pub use grid::{ClPoint, Grid};
 pub use index::DropCutter;

@@ -169,3 +169,74 @@ fn batches_and_hints_are_exact() {
         assert_eq!(hinted.map(|h| h.z_tip), one.map(|o| o.z_tip));
     }
 }
+
+/// The CL surface's height above a move's chord, against dense exact drops along the move:
+/// never below any dense sample, and reached at the point it names. On the dome and on
+/// mount_rush (a scanned mesh with narrow features that a flat end mill's rim clips).
+#[test]
+fn chord_rise_is_the_maximum_of_dense_drops() {
+    let rush = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/fixtures/ocl_mount_rush.stl");
+    let meshes = [
+        dome(),
+        Mesh::load(rush, Units::Mm).expect("mount_rush fixture"),
+    ];
+    let mut rng = Rng(11);
+    for m in &meshes {
+        let b = m.bounds();
+        for c in cutters() {
+            let dc = DropCutter::new(m, c);
+            let mut checked = 0;
+            let mut positive = 0;
+            for _ in 0..60 {
+                let a = (rng.range(b.min.x, b.max.x), rng.range(b.min.y, b.max.y));
+                let ang = rng.range(0.0, std::f64::consts::TAU);
+                let len = rng.range(0.05, 3.0);
+                let e = (a.0 + len * ang.cos(), a.1 + len * ang.sin());
+                let (Some(za), Some(zb)) = (dc.drop(a.0, a.1), dc.drop(e.0, e.1)) else {
+                    continue;
+                };
+                // Sometimes below the surface at the ends too (a move that gouges there).
+                let (za, zb) = if checked % 3 == 2 {
+                    (za - 0.05, zb - 0.02)
+                } else {
+                    (za, zb)
+                };
+                let r = dc.chord_rise(a, e, za, zb, f64::INFINITY);
+                let n = 4000;
+                let mut dense = f64::NEG_INFINITY;
+                for k in 0..=n {
+                    let t = k as f64 / n as f64;
+                    let (x, y) = (a.0 + t * (e.0 - a.0), a.1 + t * (e.1 - a.1));
+                    if let Some(z) = dc.drop(x, y) {
+                        dense = dense.max(z - (za + t * (zb - za)));
+                    }
+                }
+                assert!(
+                    r.rise_mm >= dense - 1e-9,
+                    "{c}: rise {} below dense {dense} on {a:?} -> {e:?}",
+                    r.rise_mm
+                );
+                let (x, y) = (a.0 + r.at * (e.0 - a.0), a.1 + r.at * (e.1 - a.1));
+                let there =
+                    dc.drop(x, y).expect("the rise is on the surface") - (za + r.at * (zb - za));
+                assert!(
+                    (there - r.rise_mm).abs() <= 1e-9,
+                    "{c}: rise {} but {there} at t = {}",
+                    r.rise_mm,
+                    r.at
+                );
+                if r.rise_mm > 1e-6 {
+                    positive += 1;
+                    let early = dc.chord_rise(a, e, za, zb, 0.5 * r.rise_mm);
+                    assert!(early.rise_mm > 0.5 * r.rise_mm && early.rise_mm <= r.rise_mm + 1e-12);
+                }
+                checked += 1;
+            }
+            assert!(
+                checked >= 20 && positive >= 5,
+                "{c}: {checked} moves, {positive} rising"
+            );
+        }
+    }
+}
