@@ -15,10 +15,10 @@ use crate::index::DropCutter;
 /// What [`DropCutter::chord_rise`] found along a move.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ChordRise {
-    /// Largest height (mm, vertical) of the CL surface above the chord over the move;
-    /// `-inf` when the cutter touches nothing along it. When the search stopped early at
-    /// its limit, a height above the limit that the CL surface reaches (not always the
-    /// largest).
+    /// Largest height (mm, vertical) of the CL surface above the chord over the move, or
+    /// the floor asked for if none is above it (`-inf` when the cutter touches nothing
+    /// along the move and no floor was given). When the search stopped early at its limit,
+    /// a height above the limit that the CL surface reaches (not always the largest).
     pub rise_mm: f64,
     /// Where that height is reached: the fraction of the way from the start to the end.
     pub at: f64,
@@ -31,8 +31,10 @@ const GOLDEN_ITERS: usize = 60;
 impl DropCutter {
     /// The largest height (mm) of the exact CL surface above the chord of the move from
     /// `(a, za)` to `(b, zb)` (XY in mm, tool-tip z in mm): how far the cutter moving along
-    /// the chord sinks below the surface it may touch, measured vertically. Stops as soon as
-    /// a height above `limit_mm` is found (pass `f64::INFINITY` for the exact maximum).
+    /// the chord sinks below the surface it may touch, measured vertically. Heights at or
+    /// below `floor_mm` are not searched for: if there is none above it, the result is
+    /// `floor_mm` (at 0). Stops as soon as a height above `limit_mm` is found. Pass
+    /// `-inf` and `inf` for the exact maximum.
     ///
     /// Exact up to the golden-section bracket (3e-13 of the move's length along it), and
     /// the height reported is one the CL surface reaches there: a planner may trust a value
@@ -43,6 +45,7 @@ impl DropCutter {
         b: (f64, f64),
         za: f64,
         zb: f64,
+        floor_mm: f64,
         limit_mm: f64,
     ) -> ChordRise {
         let big_r = self.pf.big_r;
@@ -51,7 +54,7 @@ impl DropCutter {
         let chord = |t: f64| za + t * (zb - za);
         let at = |t: f64| (a.0 + t * dx, a.1 + t * dy);
         let mut best = ChordRise {
-            rise_mm: f64::NEG_INFINITY,
+            rise_mm: floor_mm,
             at: 0.0,
         };
         if !(a.0.is_finite() && a.1.is_finite() && b.0.is_finite() && b.1.is_finite()) {
@@ -144,7 +147,12 @@ impl DropCutter {
                 {
                     continue;
                 }
-                let (t, v) = golden_max(l0, r0, toward_right, &h);
+                let ends = if toward_right {
+                    ((l0, h(l0)), (r0, hc))
+                } else {
+                    ((l0, hc), (r0, h(r0)))
+                };
+                let (t, v) = golden_max(ends.0, ends.1, toward_right, best.rise_mm, &h);
                 consider(&mut best, t, v);
             }
             if best.rise_mm > limit_mm {
@@ -208,26 +216,35 @@ impl DropCutter {
 
 /// Golden-section maximum of `h` on `[l, r]`, `h` concave where finite on an interval that
 /// contains `r` (`toward_right`) or `l`; ties (both `-inf` included) move towards that end.
-fn golden_max(mut l: f64, mut r: f64, toward_right: bool, h: &impl Fn(f64) -> f64) -> (f64, f64) {
+/// `fl`, `fr` are `h(l)`, `h(r)`. Stops once concavity bounds the maximum at or below
+/// `stop_at` (the result is then the best value seen, below `stop_at`).
+fn golden_max(
+    (mut l, mut fl): (f64, f64),
+    (mut r, mut fr): (f64, f64),
+    toward_right: bool,
+    stop_at: f64,
+    h: &impl Fn(f64) -> f64,
+) -> (f64, f64) {
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let (mut m1, mut m2) = (r - g * (r - l), l + g * (r - l));
     let (mut f1, mut f2) = (h(m1), h(m2));
     let mut best = if f1 >= f2 { (m1, f1) } else { (m2, f2) };
     for _ in 0..GOLDEN_ITERS {
+        if concave_bound((l, fl), (m1, f1), (m2, f2), (r, fr)) <= stop_at {
+            break;
+        }
         let go_left = if toward_right { f1 > f2 } else { f1 >= f2 };
         if go_left {
-            r = m2;
-            m2 = m1;
-            f2 = f1;
+            (r, fr) = (m2, f2);
+            (m2, f2) = (m1, f1);
             m1 = r - g * (r - l);
             f1 = h(m1);
             if f1 > best.1 {
                 best = (m1, f1);
             }
         } else {
-            l = m1;
-            m1 = m2;
-            f1 = f2;
+            (l, fl) = (m1, f1);
+            (m1, f1) = (m2, f2);
             m2 = l + g * (r - l);
             f2 = h(m2);
             if f2 > best.1 {
@@ -236,6 +253,32 @@ fn golden_max(mut l: f64, mut r: f64, toward_right: bool, h: &impl Fn(f64) -> f6
         }
     }
     best
+}
+
+/// An upper bound of a function concave where finite (on an interval) over `[l, r]` from its
+/// values at `l < m1 < m2 < r`: a secant extended beyond its interval lies above the
+/// function. Infinite when the values do not allow one.
+fn concave_bound(
+    (l, fl): (f64, f64),
+    (m1, f1): (f64, f64),
+    (m2, f2): (f64, f64),
+    (r, fr): (f64, f64),
+) -> f64 {
+    if !(f1.is_finite() && f2.is_finite()) || m2 <= m1 {
+        return f64::INFINITY;
+    }
+    let s = (f2 - f1) / (m2 - m1);
+    // [l, m1] and [m2, r]: the secant through m1 and m2.
+    let outer = f1.max(f1 + s * (l - m1)).max(f2).max(f2 + s * (r - m2));
+    // [m1, m2]: the secant through l and m1, or through m2 and r.
+    let mut inner = f64::INFINITY;
+    if fl.is_finite() && m1 > l {
+        inner = inner.min(f1.max(f1 + (f1 - fl) / (m1 - l) * (m2 - m1)));
+    }
+    if fr.is_finite() && r > m2 {
+        inner = inner.min(f2.max(f2 + (fr - f2) / (r - m2) * (m1 - m2)));
+    }
+    outer.max(inner)
 }
 
 /// Squared XY distance (mm²) from `p` to the XY projection of the triangle `v`.

@@ -15,7 +15,9 @@
 //!   pieces of the two samples bound the CL surface's dip below their chord by `dip`;
 //! * **sampled** (flat end mill, or surfaces without certificates): the exact z at the
 //!   midpoint is within η/2 of the chord and the slope does not jump (a sampling argument,
-//!   not a proof);
+//!   not a proof). A flat end mill on a surface that gives the exact rise of the CL surface
+//!   above a move skips the midpoint for the gouge side: [`prove_moves`] proves each marched
+//!   move instead;
 //! * **break** (the cutter touches nothing in between) or **unresolved** (closer than
 //!   [`MIN_DU_MM`] and not certified: a vertical CL wall).
 //!
@@ -108,6 +110,10 @@ pub(crate) struct Check {
     pub max_step: f64,
     /// Cutter radius (mm), the scale of the Eq. 1 estimate.
     pub radius: f64,
+    /// Flat end mill on a surface that gives the exact rise of the CL surface above a move
+    /// ([`ClSurface::chord_rise`]): the gouge side is proven by [`prove_moves`], so the
+    /// profile is refined only for the excess side.
+    pub exact_gouge: bool,
 }
 
 impl Check {
@@ -133,6 +139,7 @@ impl Check {
             rise_budget: RISE_FRACTION * tau,
             max_step,
             radius,
+            exact_gouge: false,
         }
     }
 }
@@ -150,6 +157,9 @@ pub(crate) struct Marched {
     pub unresolved_dev: f64,
     /// Moves whose bound rests on the sampled (heuristic) path somewhere.
     pub sampled_moves: usize,
+    /// Moves whose gouge side was sampled (flat end mills): `(u_a, u_b, excess_sampled)`,
+    /// for [`prove_moves`].
+    pub gouge_sampled: Vec<(f64, f64, bool)>,
 }
 
 fn xy(f: &Raster, u: f64, v: f64) -> (f64, f64) {
@@ -419,6 +429,21 @@ fn classify(s: &dyn ClSurface, f: &Raster, v: f64, p: &Profile, j: usize, chk: &
                 dz: (zb - za).abs(),
             })
         }
+    } else if chk.exact_gouge {
+        // The gouge side is proven move by move after marching; the excess side by the
+        // contact pieces, else by the midpoint.
+        match dip_bound(s, f, v, (ua, ca), (ub, cb)) {
+            Some(dip) if dip <= chk.dip_budget => Action::Done(Gap::Open {
+                dip: Some(dip),
+                mid: None,
+            }),
+            Some(_) => Action::Split(
+                crease_at(s, f, v, (ua, ca), (ub, cb))
+                    .filter(|&u| u - ua > MIN_DU_MM && ub - u > MIN_DU_MM)
+                    .unwrap_or(mid),
+            ),
+            None => Action::Test,
+        }
     } else if du > chk.spacing || (raised_plane && du > RAISED_PLANE_SPLIT * chk.spacing) {
         // A flat end mill's CL section can step up over a shelf and drop off it again
         // within the gap, with both ends (and the midpoint, if the drop is near it) on the
@@ -595,10 +620,19 @@ fn len3(a: (f64, f64), b: (f64, f64)) -> f64 {
     ((b.0 - a.0).powi(2) + (b.1 - a.1).powi(2)).sqrt()
 }
 
+/// Which sides of a move's bound rest on the sampled path.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Sampled {
+    /// The gouge side (CL above the move).
+    pub gouge: bool,
+    /// The excess side (move above the CL).
+    pub excess: bool,
+}
+
 /// The bound a move `i → k` gets from the gaps it spans: `Some((bound, sampled))` where
 /// `bound` is the largest penetration (normal, mm) or vertical excess (mm) it proves and
-/// `sampled` says whether the sampled path was used; `None` if the move fails.
-pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option<(f64, bool)> {
+/// `sampled` says which sides used the sampled path; `None` if the move fails.
+pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option<(f64, Sampled)> {
     let (ua, za) = p.pts[i];
     let (ub, zb) = p.pts[k];
     let du = ub - ua;
@@ -610,7 +644,7 @@ pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option
     let stretch = (1.0 + slope * slope).sqrt();
     let r = chk.corner;
     let mut worst = 0.0f64;
-    let mut sampled = false;
+    let mut sampled = Sampled::default();
     for j in i..k {
         let ((u0, z0), (u1, z1)) = (p.pts[j], p.pts[j + 1]);
         let (d0, d1) = (z0 - chord(u0), z1 - chord(u1)); // + : CL above the move (gouge side)
@@ -652,7 +686,7 @@ pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option
                     // much even on a steep move: its bottom may rest on level material
                     // near the rim while the CL climbs (on mount_rush a 67° move 0.0146 mm
                     // low cut 0.0125 mm into a level patch; normal to the move, 0.0057).
-                    sampled = true;
+                    sampled.gouge = true;
                     let g = up.max(mid_dev.unwrap_or(0.0));
                     if g > chk.accept {
                         return None;
@@ -669,7 +703,7 @@ pub(crate) fn move_bound(p: &Profile, i: usize, k: usize, chk: &Check) -> Option
                         worst = worst.max(exc);
                     }
                     None => {
-                        sampled = true;
+                        sampled.excess = true;
                         let e = down.max(mid_dev.map_or(0.0, |m| -m));
                         if e > chk.accept {
                             return None;
@@ -778,7 +812,11 @@ pub(crate) fn march(p: &Profile, chk: &Check) -> Marched {
         match move_bound(p, i, lo, chk) {
             Some((b, sampled)) => {
                 out.max_dev = out.max_dev.max(b);
-                out.sampled_moves += usize::from(sampled);
+                out.sampled_moves += usize::from(sampled.gouge || sampled.excess);
+                if sampled.gouge {
+                    out.gouge_sampled
+                        .push((pts[i].0, pts[lo].0, sampled.excess));
+                }
             }
             None => {
                 // A single gap that its own bounds do not prove (unresolved wall, or a
@@ -800,4 +838,95 @@ pub(crate) fn march(p: &Profile, chk: &Check) -> Marched {
         out.runs.push(run);
     }
     out
+}
+
+/// Rounds of [`prove_moves`] before it leaves the remaining moves on the sampled path.
+const PROOF_ROUNDS: usize = 40;
+
+/// Proves the gouge side of the moves a flat end mill's march accepted by sampling: the
+/// exact height of the CL surface above each move's chord ([`ClSurface::chord_rise`],
+/// vertical, the flat's gouge measure) must be at most τ. Where it is not, the exact sample
+/// at the highest point goes into the profile and the pass is marched again. Moves whose
+/// excess side is certified too are then proven; the rest stay counted as sampled. Surfaces
+/// that cannot tell leave the march as it was.
+pub(crate) fn prove_moves(
+    s: &dyn ClSurface,
+    f: &Raster,
+    v: f64,
+    p: &mut Profile,
+    mut m: Marched,
+    chk: &Check,
+) -> Marched {
+    use rayon::prelude::*;
+    if m.gouge_sampled.is_empty() {
+        return m;
+    }
+    let key = |ua: f64, ub: f64| (ua.to_bits(), ub.to_bits());
+    let mut proven: std::collections::HashMap<(u64, u64), f64> = Default::default();
+    let z_of = |p: &Profile, u: f64| {
+        let j = p.pts.partition_point(|q| q.0 < u);
+        p.pts.get(j).filter(|q| q.0 == u).map(|q| q.1)
+    };
+    for _ in 0..PROOF_ROUNDS {
+        let todo: Vec<(f64, f64, f64, f64)> = m
+            .gouge_sampled
+            .iter()
+            .filter(|mv| !proven.contains_key(&key(mv.0, mv.1)))
+            .filter_map(|&(ua, ub, _)| Some((ua, z_of(p, ua)?, ub, z_of(p, ub)?)))
+            .collect();
+        if todo.is_empty() {
+            break;
+        }
+        let rises: Vec<Option<(f64, f64)>> = todo
+            .par_iter()
+            .map(|&(ua, za, ub, zb)| s.chord_rise(xy(f, ua, v), xy(f, ub, v), za, zb, chk.tau))
+            .collect();
+        let mut split: Vec<f64> = Vec::new();
+        for (&(ua, _, ub, _), r) in todo.iter().zip(rises) {
+            match r {
+                None => return m,
+                Some((rise, _)) if rise <= chk.tau => {
+                    proven.insert(key(ua, ub), rise.max(0.0));
+                }
+                Some((_, at)) => split.push(ua + at * (ub - ua)),
+            }
+        }
+        if split.is_empty() {
+            break;
+        }
+        // The exact samples where the moves rose above τ, then the pass again.
+        let samples: Vec<Option<ClSample>> = split
+            .par_iter()
+            .map(|&u| sample_at(s, f, u, v, &[]))
+            .collect();
+        p.drops += split.len();
+        let mut inserted = false;
+        for (&u, c) in split.iter().zip(samples) {
+            let Some(c) = c else { continue };
+            let j = p.pts.partition_point(|q| q.0 < u);
+            if j == 0 || j >= p.pts.len() || p.pts[j].0 == u {
+                continue;
+            }
+            p.pts.insert(j, (u, c.z));
+            p.cert.insert(j, c);
+            p.gaps[j - 1] = Gap::Pending;
+            p.gaps.insert(j, Gap::Pending);
+            inserted = true;
+        }
+        if !inserted {
+            break;
+        }
+        *p = refine(s, f, v, std::mem::take(p), chk);
+        m = march(p, chk);
+    }
+    // Recount with the proofs.
+    for &(ua, ub, excess_sampled) in &m.gouge_sampled {
+        if let Some(&rise) = proven.get(&key(ua, ub)) {
+            m.max_dev = m.max_dev.max(rise);
+            if !excess_sampled {
+                m.sampled_moves -= 1;
+            }
+        }
+    }
+    m
 }

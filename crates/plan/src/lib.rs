@@ -17,9 +17,11 @@
 //!   surface, `r` the corner radius), the contact pieces' bound on the CL's dip below a chord,
 //!   or a plane certificate over flat ground. The lemma needs only exact samples of a genuine
 //!   CL surface; the dip and plane bounds need a [`ClSurface`] that certifies (the
-//!   drop-cutter of a mesh does). Flat end mills (no corner radius) and surfaces without
-//!   certificates fall back to midpoint tests for what those bounds cannot give (a sampling
-//!   argument; such moves are counted in [`Plan::sampled_moves`]). Vertical walls of the CL
+//!   drop-cutter of a mesh does). Flat end mills (no corner radius) are proven move by move
+//!   from the exact rise of the CL surface above the move ([`ClSurface::chord_rise`],
+//!   vertical). Surfaces without these certificates fall back to midpoint tests for what
+//!   the bounds cannot give (a sampling argument; such moves are counted in
+//!   [`Plan::sampled_moves`]). Vertical walls of the CL
 //!   surface that cannot be resolved above 1e-5 mm are counted in [`Plan::unresolved_joins`].
 //! - **Side step.** The scallop forms in the plane perpendicular to the motion along the pass,
 //!   where the cutter shows its outline seen along that motion ([`sidestep::Silhouette`]:
@@ -149,6 +151,22 @@ pub trait ClSurface: Sync {
         let _ = (a, b, n, d, max_rise_mm);
         None
     }
+
+    /// The largest height (mm, vertical) of the CL surface above the chord of the move from
+    /// `(a, za)` to `(b, zb)` (XY mm, tool-tip z mm) and the fraction of the move where it is
+    /// reached (heights below 0 may be reported as 0); once a height above `limit_mm` is
+    /// found it may stop with that one. `None` if the surface cannot tell.
+    fn chord_rise(
+        &self,
+        a: (f64, f64),
+        b: (f64, f64),
+        za: f64,
+        zb: f64,
+        limit_mm: f64,
+    ) -> Option<(f64, f64)> {
+        let _ = (a, b, za, zb, limit_mm);
+        None
+    }
 }
 
 #[cfg(feature = "mesh")]
@@ -185,6 +203,18 @@ impl ClSurface for cam_offset::DropCutter {
                 rise_mm: c.rise_mm,
                 covered: c.covered,
             })
+    }
+
+    fn chord_rise(
+        &self,
+        a: (f64, f64),
+        b: (f64, f64),
+        za: f64,
+        zb: f64,
+        limit_mm: f64,
+    ) -> Option<(f64, f64)> {
+        let r = cam_offset::DropCutter::chord_rise(self, a, b, za, zb, 0.0, limit_mm);
+        Some((r.rise_mm, r.at))
     }
 }
 

@@ -111,8 +111,9 @@ pub struct Plan {
     /// Pass profiles built: the passes kept, the candidates the side-step search rejected,
     /// and the pass behind the first one.
     pub pass_builds: usize,
-    /// Cut moves on passes whose bound rests on sampling somewhere (flat end mills, surfaces
-    /// without certificates); every other move's bound is proven (see the crate docs).
+    /// Cut moves on passes whose bound rests on sampling somewhere (surfaces without
+    /// certificates; a flat end mill's move whose excess side the contact pieces could not
+    /// bound); every other move's bound is proven (see the crate docs).
     pub sampled_moves: usize,
 }
 
@@ -202,19 +203,24 @@ fn plan_passes(
     if v_lo.is_nan() || v_hi.is_nan() || v_lo > v_hi {
         return Err(PlanError::NothingToCut);
     }
+    let mut chk = Check::new(
+        cfg.tolerance_mm,
+        cutter.corner_radius(),
+        rr,
+        c,
+        cfg.max_step_mm.unwrap_or(f64::INFINITY),
+    );
+    chk.exact_gouge = cutter.corner_radius() == 0.0
+        && surface
+            .chord_rise((0.0, 0.0), (0.0, 0.0), 0.0, 0.0, 0.0)
+            .is_some();
     let ctx = Ctx {
         surface,
         sampler,
         cfg,
         frame,
         model: sidestep::SideStepModel::new(cutter, h),
-        chk: Check::new(
-            cfg.tolerance_mm,
-            cutter.corner_radius(),
-            rr,
-            c,
-            cfg.max_step_mm.unwrap_or(f64::INFINITY),
-        ),
+        chk,
         initial: cfg.section_step_mm()?,
         floor: STEEP_FLOOR_FRACTION * w_ref,
         w_ref,
@@ -313,6 +319,14 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
         let marched = feed::march(&prof, chk);
         Pass { v, prof, marched }
     };
+    // A kept pass's moves, with the gouge side of sampled ones proven where the surface can.
+    let finish = |pass: &mut Pass, drops: &mut usize| -> feed::Marched {
+        let before = pass.prof.drops;
+        let m = std::mem::take(&mut pass.marched);
+        let m = feed::prove_moves(surface, frame, pass.v, &mut pass.prof, m, chk);
+        *drops += pass.prof.drops - before;
+        m
+    };
     // The first interval's curvature needs a pass behind the first one.
     let w0 = model.xy_interval(0.0, 0.0, f64::INFINITY);
     let mut behind: Option<Pass> = Some(build(v_lo - w0.min(0.5 * w_ref).max(floor), &mut drops));
@@ -336,7 +350,7 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
                 steep: 0,
                 floor_limited: false,
             });
-            marched.push(cur.marched);
+            marched.push(finish(&mut cur, &mut drops));
             break;
         }
         // Predictor–corrector: build the next pass at the predicted interval and evaluate the
@@ -458,8 +472,8 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
             .max(floor)
             .min(2.0 * dv);
         dv_prev = dv;
-        let done = std::mem::replace(&mut cur, next);
-        marched.push(done.marched);
+        let mut done = std::mem::replace(&mut cur, next);
+        marched.push(finish(&mut done, &mut drops));
         behind = Some(Pass {
             v: done.v,
             prof: done.prof,

@@ -202,7 +202,7 @@ fn chord_rise_is_the_maximum_of_dense_drops() {
                 } else {
                     (za, zb)
                 };
-                let r = dc.chord_rise(a, e, za, zb, f64::INFINITY);
+                let r = dc.chord_rise(a, e, za, zb, f64::NEG_INFINITY, f64::INFINITY);
                 let n = 4000;
                 let mut dense = f64::NEG_INFINITY;
                 for k in 0..=n {
@@ -228,9 +228,17 @@ fn chord_rise_is_the_maximum_of_dense_drops() {
                 );
                 if r.rise_mm > 1e-6 {
                     positive += 1;
-                    let early = dc.chord_rise(a, e, za, zb, 0.5 * r.rise_mm);
+                    let early = dc.chord_rise(a, e, za, zb, f64::NEG_INFINITY, 0.5 * r.rise_mm);
                     assert!(early.rise_mm > 0.5 * r.rise_mm && early.rise_mm <= r.rise_mm + 1e-12);
                 }
+                // With a floor: the same height if it is above the floor, else the floor.
+                let fl = dc.chord_rise(a, e, za, zb, 0.0, f64::INFINITY);
+                assert!(
+                    (fl.rise_mm - r.rise_mm.max(0.0)).abs() <= 1e-9,
+                    "{c}: floored {} vs {}",
+                    fl.rise_mm,
+                    r.rise_mm
+                );
                 checked += 1;
             }
             assert!(

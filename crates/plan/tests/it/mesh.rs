@@ -277,3 +277,81 @@ fn dome_foot_bull_scallop_is_measured_not_the_cutter_radius() {
     let above = p.predicted_max_scallop_mm > cfg.scallop_mm * (1.0 + cam_plan::VERIFY_SLACK);
     assert_eq!(above, p.floor_limited_passes > 0);
 }
+
+/// A flat end mill's CL surface over a plate with a needle: a mesa of the needle's height
+/// within R of its tip. A pass 1 µm inside the mesa's rim crosses it in 5 µm, far between
+/// any samples: the sampled path would cut straight through the needle's 0.5 mm. The exact
+/// rise of the CL surface above each move ([`ClSurface::chord_rise`]) finds it, and the
+/// pass climbs over it. (Without the proof the pass ran straight through at z = 0.)
+#[test]
+fn flat_end_mill_climbs_a_needle_the_samples_miss() {
+    use cam_core::{DVec3, Triangle};
+    let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
+    let (sx, sy, top) = (0.3, 0.2, 0.5);
+    let mut tris = vec![
+        Triangle::new(
+            p(-20.0, -20.0, 0.0),
+            p(20.0, -20.0, 0.0),
+            p(20.0, 20.0, 0.0),
+        ),
+        Triangle::new(
+            p(-20.0, -20.0, 0.0),
+            p(20.0, 20.0, 0.0),
+            p(-20.0, 20.0, 0.0),
+        ),
+    ];
+    let base = [
+        p(sx - 1e-3, sy + 1e-3, 0.0),
+        p(sx + 1e-3, sy + 1e-3, 0.0),
+        p(sx, sy + 2e-3, 0.0),
+    ];
+    let apex = p(sx, sy, top);
+    for k in 0..3 {
+        tris.push(Triangle::new(base[k], base[(k + 1) % 3], apex));
+    }
+    let mesh = Mesh::from_triangles(tris, "<needle>").unwrap();
+    let cutter: Cutter = "flat:6".parse().unwrap();
+    let tau = 0.01;
+    // The first pass (at the box's low edge, along x) passes 3 mm − 1 µm from the tip.
+    let y0 = sy - (3.0 - 1e-6);
+    let cfg = PlanConfig {
+        cutter,
+        tolerance_mm: tau,
+        scallop_mm: 0.05,
+        boundary: Some((-8.0, 8.0, y0, y0 + 0.5)),
+        ..PlanConfig::default()
+    };
+    let plan = plan_part(&mesh, &cfg, None).unwrap();
+    let dc = DropCutter::new(&mesh, cutter);
+    let cl = dc.z_tip(sx, y0).unwrap();
+    assert!(cl >= top - 1e-9, "the needle is within reach: {cl}");
+    // The move over x = sx on the first pass.
+    let moves = &plan.toolpath.moves;
+    let over = moves
+        .windows(2)
+        .filter(|w| w[1].kind == MoveKind::Cut && w[1].pass.is_some())
+        .map(|w| (w[0].pose.tip, w[1].pose.tip))
+        .find(|(a, b)| {
+            (a.y - y0).abs() < 1e-9
+                && (b.y - y0).abs() < 1e-9
+                && a.x.min(b.x) <= sx
+                && a.x.max(b.x) >= sx
+        })
+        .expect("a move of the first pass over the needle");
+    let (a, b) = over;
+    let t = if b.x == a.x {
+        0.0
+    } else {
+        (sx - a.x) / (b.x - a.x)
+    };
+    let z = a.z + t * (b.z - a.z);
+    eprintln!(
+        "needle: move ({:.6}, {:.4}) -> ({:.6}, {:.4}) at z {z:.4} over the CL {cl:.4}; sampled moves {}",
+        a.x, a.z, b.x, b.z, plan.sampled_moves
+    );
+    assert!(
+        z >= cl - tau - 1e-9,
+        "the move cuts {} into the needle",
+        cl - z
+    );
+}
