@@ -115,7 +115,8 @@ impl DropCutter {
                     (0.0, 0.0)
                 };
                 let bound = t.top - chord(lo).min(chord(hi));
-                Some((bound, s, lo, hi))
+                // Cannot rise above the floor: not a candidate.
+                (bound > floor_mm).then_some((bound, s, lo, hi))
             })
             .collect();
         cands.sort_by(|p, q| q.0.total_cmp(&p.0).then(p.1.cmp(&q.1)));

@@ -154,8 +154,9 @@ pub trait ClSurface: Sync {
 
     /// The largest height (mm, vertical) of the CL surface above the chord of the move from
     /// `(a, za)` to `(b, zb)` (XY mm, tool-tip z mm) and the fraction of the move where it is
-    /// reached (heights below 0 may be reported as 0); once a height above `limit_mm` is
-    /// found it may stop with that one. `None` if the surface cannot tell.
+    /// reached; heights at or below `limit_mm / 2` may be reported as `limit_mm / 2` (an
+    /// upper bound is all a proof needs), and once a height above `limit_mm` is found it
+    /// may stop with that one. `None` if the surface cannot tell.
     fn chord_rise(
         &self,
         a: (f64, f64),
@@ -213,7 +214,7 @@ impl ClSurface for cam_offset::DropCutter {
         zb: f64,
         limit_mm: f64,
     ) -> Option<(f64, f64)> {
-        let r = cam_offset::DropCutter::chord_rise(self, a, b, za, zb, 0.0, limit_mm);
+        let r = cam_offset::DropCutter::chord_rise(self, a, b, za, zb, 0.5 * limit_mm, limit_mm);
         Some((r.rise_mm, r.at))
     }
 }
