@@ -158,7 +158,7 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
     }
     println!(
         "\nplanner's bound: the largest penetration or vertical excess the planner proved for a \
-         cut move (flat end mills: checked at samples). max gouge: deepest design point in the \
+         cut move (a flat end mill: vertical, from the exact rise of the CL surface over the move). max gouge: deepest design point in the \
          swept volume of the re-read program (exact for ball and bull; for a flat end mill at \
          most over-stated by the direction search). max scallop: largest \
          material left at a design point the cutter can touch, normal to the surface (first \
