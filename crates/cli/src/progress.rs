@@ -18,14 +18,3 @@ pub fn bar(len: u64, what: &str, quiet: bool) -> ProgressBar {
     pb.set_message(what.to_string());
     pb
 }
-
-/// A spinner for work of unknown length, hidden unless stderr is a terminal.
-pub fn spinner(what: &str, quiet: bool) -> ProgressBar {
-    if quiet || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new_spinner();
-    pb.set_message(what.to_string());
-    pb.enable_steady_tick(std::time::Duration::from_millis(120));
-    pb
-}

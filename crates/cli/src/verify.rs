@@ -143,8 +143,18 @@ pub fn run_verification(
     if !(tolerance.is_finite() && tolerance > 0.0) {
         bail!("--tolerance must be a positive number of mm, got {tolerance}");
     }
-    let pb = crate::progress::spinner("verifying", quiet);
-    let v = cam_verify::verify(mesh, path, cutter, &cfg)?;
+    let pb = crate::progress::bar(1, "sweeping", quiet);
+    pb.enable_steady_tick(std::time::Duration::from_millis(200));
+    let report = |st: cam_verify::Stage, done: usize, total: usize| {
+        pb.set_message(match st {
+            cam_verify::Stage::Sweep => "sweeping",
+            cam_verify::Stage::Refine => "refining",
+            cam_verify::Stage::Measure => "measuring",
+        });
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+    };
+    let v = cam_verify::verify_with_progress(mesh, path, cutter, &cfg, Some(&report))?;
     pb.finish_and_clear();
     if let Some(p) = &o.swept {
         let ext = p

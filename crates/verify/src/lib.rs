@@ -17,4 +17,7 @@ pub mod sweep;
 pub mod testpaths;
 pub mod zmap;
 
-pub use pipeline::{Timings, Verification, VerifyConfig, VerifyError, verify};
+pub use pipeline::{
+    Stage, StageProgress, Timings, Verification, VerifyConfig, VerifyError, verify,
+    verify_with_progress,
+};

@@ -126,6 +126,12 @@ pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source,
     g.depth_at(p)
 }
 
+/// Progress callback: `(vectors done, vectors in all)`; called between chunks.
+pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
+
+/// Vectors located and refined per chunk (progress is reported between chunks).
+const MEASURE_CHUNK: usize = 1 << 17;
+
 const SAFETY: f64 = 4.0;
 const MIN_FACING: f64 = 0.5;
 
@@ -568,6 +574,48 @@ pub fn measure_with_inner(
     surface: SurfaceModel,
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
+    measure_inner(
+        refined, inner_mm, models, toolpath, cfg, surface, locator, None,
+    )
+}
+
+/// [`measure`] reporting progress (`(vectors done, vectors in all)`) between chunks of
+/// vectors; the result is the same.
+///
+/// # Errors
+/// As [`measure`].
+pub fn measure_progress(
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+    progress: Progress<'_>,
+) -> Result<Measurement, DeviationError> {
+    let inner = vec![cfg.inside_mm; refined.positions.len()];
+    measure_inner(
+        refined,
+        &inner,
+        models,
+        toolpath,
+        cfg,
+        surface,
+        Locator::Fast,
+        Some(progress),
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn measure_inner(
+    refined: &RefinedMesh,
+    inner_mm: &[f64],
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+    locator: Locator,
+    progress: Option<Progress<'_>>,
+) -> Result<Measurement, DeviationError> {
     let ok = |x: f64| x.is_finite() && x >= 0.0;
     let bad = inner_mm.iter().find(|&&x| !ok(x));
     if !ok(cfg.inside_mm)
@@ -593,7 +641,7 @@ pub fn measure_with_inner(
         })
         .collect();
     Ok(measure_vectors(
-        &vectors, models, toolpath, cfg.facing, surface, locator,
+        &vectors, models, toolpath, cfg.facing, surface, locator, progress,
     ))
 }
 
@@ -623,6 +671,7 @@ pub fn first_entries(
         Facing::AgainstVector,
         surface,
         Locator::Fast,
+        None,
     )
     .deviations
     .iter()
@@ -638,6 +687,7 @@ fn measure_vectors(
     facing: Facing,
     surface: SurfaceModel,
     locator: Locator,
+    progress: Option<Progress<'_>>,
 ) -> Measurement {
     let exact = surface == SurfaceModel::Exact;
     let vectors = vectors.to_vec();
@@ -646,18 +696,17 @@ fn measure_vectors(
     // passing just outside a triangle counts: the true sheet bulges past its chords by up to
     // the sag, so near a sheet's curved edge a line can enter it and miss its triangles.
     let margin = if exact { edge_margin(models) } else { 0.0 };
-    let found = match locator {
-        Locator::Fast => {
-            let bvhs: Vec<PatchBvh> = models
-                .iter()
-                .map(|m| PatchBvh::new(m, !exact, margin))
-                .collect();
-            let pairs: Vec<(&SweepModel, &PatchBvh)> = models.iter().copied().zip(&bvhs).collect();
-            locate(&pairs, &vectors, delta, margin)
-        }
-        Locator::Reference => {
-            crate::locate::locate_reference(models, &vectors, delta, margin, !exact)
-        }
+    let bvhs: Vec<PatchBvh> = match locator {
+        Locator::Fast => models
+            .iter()
+            .map(|m| PatchBvh::new(m, !exact, margin))
+            .collect(),
+        Locator::Reference => Vec::new(),
+    };
+    let pairs: Vec<(&SweepModel, &PatchBvh)> = models.iter().copied().zip(&bvhs).collect();
+    let find = |vs: &[Vector]| match locator {
+        Locator::Fast => locate(&pairs, vs, delta, margin),
+        Locator::Reference => crate::locate::locate_reference(models, vs, delta, margin, !exact),
     };
     let puck = models
         .first()
@@ -674,226 +723,229 @@ fn measure_vectors(
         models[c.model as usize].pieces[piece].source_move()
     };
     type PerVector = (Deviation, f64, Option<f64>, Option<Source>, [usize; 5]);
-    let per: Vec<PerVector> = vectors
-        .par_iter()
-        .zip(found.par_iter())
-        .map(|(v, f)| {
-            let mut stats = [0usize; 5];
-            let dev = |s: Option<f64>, mv: Option<u32>| Deviation {
-                position: v.o,
-                normal: v.n,
-                signed_mm: s,
-                source_move: mv,
+    let one = |(v, f): (&Vector, &crate::locate::Found)| -> PerVector {
+        let mut stats = [0usize; 5];
+        let dev = |s: Option<f64>, mv: Option<u32>| Deviation {
+            position: v.o,
+            normal: v.n,
+            signed_mm: s,
+            source_move: mv,
+        };
+        stats[4] = usize::from(f.overflow);
+        let low = f.crossings.first();
+        let linear = low.map(|l| (l.s, move_of(l), l.facing));
+        let source_of = |c: &Crossing| {
+            let m = models[c.model as usize];
+            match m.pieces[unkey(c.key).0] {
+                Piece::Strip { step, .. } | Piece::Gap { step, .. } => Source::Move(step.mv),
+                Piece::Cap { frame, .. } => Source::Pose {
+                    model: c.model,
+                    frame,
+                },
+            }
+        };
+        let low_src = low.map(source_of);
+        if !exact {
+            stats[0] = usize::from(low.is_some());
+            return match linear {
+                Some((s, mv, fc)) => (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats),
+                None => (dev(None, None), 0.0, None, None, stats),
             };
-            stats[4] = usize::from(f.overflow);
-            let low = f.crossings.first();
-            let linear = low.map(|l| (l.s, move_of(l), l.facing));
-            let source_of = |c: &Crossing| {
+        }
+        let line = Line {
+            o: v.o,
+            n: v.n,
+            lo: v.lo,
+            hi: v.hi,
+        };
+        // Best refined entry: (entry, move, order key, source).
+        type Best = Option<(Entry, u32, (u8, u64), Source)>;
+        let mut best: Best = None;
+        let better = |e: Entry, mv: u32, k: (u8, u64), src: Source, best: &mut Best| {
+            if facing_ok(e.normal.dot(v.n))
+                && best.is_none_or(|(b, _, bk, _)| e.s < b.s || (e.s == b.s && k < bk))
+            {
+                *best = Some((e, mv, k, src));
+            }
+        };
+        let mut done: Vec<(u8, u64)> = Vec::new();
+        // A crossing whose refinement found no entry where the answer is not in closed
+        // form (a rotating move's search): then the linear value stands in.
+        let mut inconclusive = false;
+        if let Some(low) = low {
+            // Each crossing's true surface lies at most its window below it. In order of
+            // the crossings (lowest first): none beyond the best entry found plus the
+            // largest window can win; one whose own window does not reach below the best
+            // entry, or below the lowest crossing, cannot either.
+            for c in &f.crossings {
+                if best.is_some_and(|b| c.s - delta > b.0.s) {
+                    break;
+                }
+                let id = rf.identity(c);
+                if done.contains(&id) {
+                    continue;
+                }
+                let (piece, _) = unkey(c.key);
                 let m = models[c.model as usize];
-                match m.pieces[unkey(c.key).0] {
-                    Piece::Strip { step, .. } | Piece::Gap { step, .. } => Source::Move(step.mv),
-                    Piece::Cap { frame, .. } => Source::Pose {
-                        model: c.model,
-                        frame,
-                    },
-                }
-            };
-            let low_src = low.map(source_of);
-            if !exact {
-                stats[0] = usize::from(low.is_some());
-                return match linear {
-                    Some((s, mv, fc)) => (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats),
-                    None => (dev(None, None), 0.0, None, None, stats),
+                // Where the path turns at one of the step's poses the true surface holds
+                // the tool there (the fan between the imprint curves of the two
+                // directions), which the strips can miss by up to R(1 − cos(turn/2)).
+                let fan = match m.pieces[piece] {
+                    Piece::Strip { frame, .. } => {
+                        let t = m.turn[frame as usize].max(m.turn[frame as usize + 1]);
+                        m.cutter().radius() * (1.0 - (0.5 * t).cos())
+                    }
+                    _ => 0.0,
                 };
-            }
-            let line = Line {
-                o: v.o,
-                n: v.n,
-                lo: v.lo,
-                hi: v.hi,
-            };
-            // Best refined entry: (entry, move, order key, source).
-            type Best = Option<(Entry, u32, (u8, u64), Source)>;
-            let mut best: Best = None;
-            let better = |e: Entry, mv: u32, k: (u8, u64), src: Source, best: &mut Best| {
-                if facing_ok(e.normal.dot(v.n))
-                    && best.is_none_or(|(b, _, bk, _)| e.s < b.s || (e.s == b.s && k < bk))
-                {
-                    *best = Some((e, mv, k, src));
+                let sag = f64::from(m.sag[piece]);
+                let d = ((SAFETY * sag + fan) / c.facing.abs().max(MIN_FACING)).min(delta);
+                // A candidate whose surface cannot lie below the best entry (ties
+                // included: they would not change the answer) is not refined.
+                if c.s > low.s + d || best.is_some_and(|b| c.s - d >= b.0.s) {
+                    continue;
                 }
-            };
-            let mut done: Vec<(u8, u64)> = Vec::new();
-            // A crossing whose refinement found no entry where the answer is not in closed
-            // form (a rotating move's search): then the linear value stands in.
-            let mut inconclusive = false;
-            if let Some(low) = low {
-                // Each crossing's true surface lies at most its window below it. In order of
-                // the crossings (lowest first): none beyond the best entry found plus the
-                // largest window can win; one whose own window does not reach below the best
-                // entry, or below the lowest crossing, cannot either.
-                for c in &f.crossings {
-                    if best.is_some_and(|b| c.s - delta > b.0.s) {
-                        break;
-                    }
-                    let id = rf.identity(c);
-                    if done.contains(&id) {
-                        continue;
-                    }
-                    let (piece, _) = unkey(c.key);
-                    let m = models[c.model as usize];
-                    // Where the path turns at one of the step's poses the true surface holds
-                    // the tool there (the fan between the imprint curves of the two
-                    // directions), which the strips can miss by up to R(1 − cos(turn/2)).
-                    let fan = match m.pieces[piece] {
-                        Piece::Strip { frame, .. } => {
-                            let t = m.turn[frame as usize].max(m.turn[frame as usize + 1]);
-                            m.cutter().radius() * (1.0 - (0.5 * t).cos())
-                        }
-                        _ => 0.0,
+                done.push(id);
+                stats[1] += 1;
+                if let Some((e, mv)) = rf.refine(&line, c) {
+                    let src = match source_of(c) {
+                        Source::Move(_) => Source::Move(mv),
+                        p => p,
                     };
-                    let sag = f64::from(m.sag[piece]);
-                    let d = ((SAFETY * sag + fan) / c.facing.abs().max(MIN_FACING)).min(delta);
-                    // A candidate whose surface cannot lie below the best entry (ties
-                    // included: they would not change the answer) is not refined.
-                    if c.s > low.s + d || best.is_some_and(|b| c.s - d >= b.0.s) {
-                        continue;
-                    }
-                    done.push(id);
-                    stats[1] += 1;
-                    if let Some((e, mv)) = rf.refine(&line, c) {
-                        let src = match source_of(c) {
-                            Source::Move(_) => Source::Move(mv),
-                            p => p,
+                    better(e, mv, (c.model, c.key), src, &mut best);
+                } else if !rf.answers_exactly(c) {
+                    inconclusive = true;
+                }
+                // A translation's neighbours at the step's ends: near a joint the other
+                // move's volume may be the lower one.
+                if let Piece::Strip { step, .. } = m.pieces[piece]
+                    && id.0 == u8::MAX
+                {
+                    let ends = [
+                        (step.u_from.min(step.u_to) == 0.0, step.mv.checked_sub(1)),
+                        (step.u_from.max(step.u_to) == 1.0, Some(step.mv + 1)),
+                    ];
+                    for (touch, adj) in ends {
+                        let Some(am) = adj.filter(|_| touch) else {
+                            continue;
                         };
-                        better(e, mv, (c.model, c.key), src, &mut best);
-                    } else if !rf.answers_exactly(c) {
-                        inconclusive = true;
-                    }
-                    // A translation's neighbours at the step's ends: near a joint the other
-                    // move's volume may be the lower one.
-                    if let Piece::Strip { step, .. } = m.pieces[piece]
-                        && id.0 == u8::MAX
-                    {
-                        let ends = [
-                            (step.u_from.min(step.u_to) == 0.0, step.mv.checked_sub(1)),
-                            (step.u_from.max(step.u_to) == 1.0, Some(step.mv + 1)),
-                        ];
-                        for (touch, adj) in ends {
-                            let Some(am) = adj.filter(|_| touch) else {
-                                continue;
-                            };
-                            let Some(ga) = rf.feed_geometry(am).filter(|g| g.is_translation())
-                            else {
-                                continue;
-                            };
-                            let aid = (u8::MAX, am as u64);
-                            if done.contains(&aid) {
-                                continue;
-                            }
-                            done.push(aid);
-                            stats[1] += 1;
-                            if let Some(e) = ga.translation_entry(&line) {
-                                better(e, am, aid, Source::Move(am), &mut best);
-                            }
+                        let Some(ga) = rf.feed_geometry(am).filter(|g| g.is_translation()) else {
+                            continue;
+                        };
+                        let aid = (u8::MAX, am as u64);
+                        if done.contains(&aid) {
+                            continue;
+                        }
+                        done.push(aid);
+                        stats[1] += 1;
+                        if let Some(e) = ga.translation_entry(&line) {
+                            better(e, am, aid, Source::Move(am), &mut best);
                         }
                     }
                 }
             }
-            if let Some(extras) = &extras {
-                let hi = best.map_or(v.hi, |b| b.0.s);
-                extras.visit(&line, hi, |ci, hi| {
-                    let (mi, pi, c, _) = extras.items[ci];
-                    let model = models[mi as usize];
-                    let seg = Line { hi, ..line };
-                    match model.pieces[pi as usize] {
-                        Piece::Cap { frame, mv } => {
-                            let k = model.frames[frame as usize].axis;
-                            // The puck lies in the cylinder of radius a + r, half-height
-                            // r about its torus centre: much tighter than the bounding
-                            // sphere along the axis (a tool resting on a face).
-                            let bound =
-                                crate::exact::cylinder_entry(&seg, c, k, puck.a + puck.r, puck.r);
-                            if bound.is_none_or(|s| s > hi) {
-                                return hi;
-                            }
-                            let pose = cam_core::Pose {
-                                tip: c - puck.r * k,
-                                axis: k,
-                            };
-                            let g = MoveGeometry {
-                                a: pose,
-                                b: pose,
-                                puck,
-                            };
-                            stats[1] += 1;
-                            if let Some(e) = g.entry_at(&seg, 0.0) {
-                                let src = Source::Pose { model: mi, frame };
-                                better(e, mv, (mi, (pi as u64) << 32), src, &mut best);
-                            }
+        }
+        if let Some(extras) = &extras {
+            let hi = best.map_or(v.hi, |b| b.0.s);
+            extras.visit(&line, hi, |ci, hi| {
+                let (mi, pi, c, _) = extras.items[ci];
+                let model = models[mi as usize];
+                let seg = Line { hi, ..line };
+                match model.pieces[pi as usize] {
+                    Piece::Cap { frame, mv } => {
+                        let k = model.frames[frame as usize].axis;
+                        // The puck lies in the cylinder of radius a + r, half-height
+                        // r about its torus centre: much tighter than the bounding
+                        // sphere along the axis (a tool resting on a face).
+                        let bound =
+                            crate::exact::cylinder_entry(&seg, c, k, puck.a + puck.r, puck.r);
+                        if bound.is_none_or(|s| s > hi) {
+                            return hi;
                         }
-                        Piece::Gap { step, .. } => {
-                            let Some(g) = rf.feed_geometry(step.mv) else {
-                                return hi;
-                            };
-                            let id = if g.is_translation() {
-                                (u8::MAX, step.mv as u64)
-                            } else {
-                                (mi, pi as u64)
-                            };
-                            if done.contains(&id) {
-                                return hi;
-                            }
-                            done.push(id);
-                            stats[1] += 1;
-                            let e = if g.is_translation() {
-                                g.translation_entry(&seg)
-                            } else {
-                                let (u0, u1) =
-                                    (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
-                                let du = u1 - u0;
-                                g.entry_min_over(&seg, (u0 - du).max(0.0), (u1 + du).min(1.0))
-                                    .map(|(e, _)| e)
-                            };
-                            if let Some(e) = e {
-                                let k = (id.0, ((pi as u64) << 32) | (id.1 & 0xffff_ffff));
-                                better(e, step.mv, k, Source::Move(step.mv), &mut best);
-                            }
+                        let pose = cam_core::Pose {
+                            tip: c - puck.r * k,
+                            axis: k,
+                        };
+                        let g = MoveGeometry {
+                            a: pose,
+                            b: pose,
+                            puck,
+                        };
+                        stats[1] += 1;
+                        if let Some(e) = g.entry_at(&seg, 0.0) {
+                            let src = Source::Pose { model: mi, frame };
+                            better(e, mv, (mi, (pi as u64) << 32), src, &mut best);
                         }
-                        Piece::Strip { .. } => {}
                     }
-                    best.map_or(hi, |b| b.0.s.min(hi))
-                });
+                    Piece::Gap { step, .. } => {
+                        let Some(g) = rf.feed_geometry(step.mv) else {
+                            return hi;
+                        };
+                        let id = if g.is_translation() {
+                            (u8::MAX, step.mv as u64)
+                        } else {
+                            (mi, pi as u64)
+                        };
+                        if done.contains(&id) {
+                            return hi;
+                        }
+                        done.push(id);
+                        stats[1] += 1;
+                        let e = if g.is_translation() {
+                            g.translation_entry(&seg)
+                        } else {
+                            let (u0, u1) = (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
+                            let du = u1 - u0;
+                            g.entry_min_over(&seg, (u0 - du).max(0.0), (u1 + du).min(1.0))
+                                .map(|(e, _)| e)
+                        };
+                        if let Some(e) = e {
+                            let k = (id.0, ((pi as u64) << 32) | (id.1 & 0xffff_ffff));
+                            better(e, step.mv, k, Source::Move(step.mv), &mut best);
+                        }
+                    }
+                    Piece::Strip { .. } => {}
+                }
+                best.map_or(hi, |b| b.0.s.min(hi))
+            });
+        }
+        match (best, linear) {
+            (Some((e, mv, _, src)), _) => {
+                stats[0] = 1;
+                stats[2] = 1;
+                let lin = linear.map(|l| l.0);
+                (
+                    dev(Some(e.s), Some(mv)),
+                    e.normal.dot(v.n),
+                    lin,
+                    Some(src),
+                    stats,
+                )
             }
-            match (best, linear) {
-                (Some((e, mv, _, src)), _) => {
-                    stats[0] = 1;
-                    stats[2] = 1;
-                    let lin = linear.map(|l| l.0);
-                    (
-                        dev(Some(e.s), Some(mv)),
-                        e.normal.dot(v.n),
-                        lin,
-                        Some(src),
-                        stats,
-                    )
-                }
-                (None, Some(_)) if !inconclusive => {
-                    // Every located crossing was tested exactly and the line enters none of
-                    // their volumes: it passes within the triangles' margin of the swept
-                    // surface but outside it.
-                    stats[0] = 1;
-                    (dev(None, None), 0.0, linear.map(|l| l.0), None, stats)
-                }
-                (None, Some((s, mv, fc))) => {
-                    // Crossings located but none refined: keep the linear value.
-                    stats[0] = 1;
-                    stats[3] = 1;
-                    (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats)
-                }
-                (None, None) => (dev(None, None), 0.0, None, None, stats),
+            (None, Some(_)) if !inconclusive => {
+                // Every located crossing was tested exactly and the line enters none of
+                // their volumes: it passes within the triangles' margin of the swept
+                // surface but outside it.
+                stats[0] = 1;
+                (dev(None, None), 0.0, linear.map(|l| l.0), None, stats)
             }
-        })
-        .collect();
+            (None, Some((s, mv, fc))) => {
+                // Crossings located but none refined: keep the linear value.
+                stats[0] = 1;
+                stats[3] = 1;
+                (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats)
+            }
+            (None, None) => (dev(None, None), 0.0, None, None, stats),
+        }
+    };
+    // In chunks, for progress; each vector's answer depends on the vector alone.
+    let mut per: Vec<PerVector> = Vec::with_capacity(vectors.len());
+    for chunk in vectors.chunks(MEASURE_CHUNK) {
+        let found = find(chunk);
+        per.par_extend(chunk.par_iter().zip(found.par_iter()).map(one));
+        if let Some(p) = progress {
+            p(per.len(), vectors.len());
+        }
+    }
     let mut stats = MeasureStats::default();
     let mut deviations = Vec::with_capacity(per.len());
     let mut facings = Vec::with_capacity(per.len());

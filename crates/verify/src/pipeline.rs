@@ -274,6 +274,40 @@ pub fn verify(
     cutter: &Cutter,
     cfg: &VerifyConfig,
 ) -> Result<Verification, VerifyError> {
+    verify_with_progress(part, toolpath, cutter, cfg, None)
+}
+
+/// A stage of [`verify_with_progress`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// Sweeping the toolpath (imprint curves, forward and back-gouge).
+    Sweep,
+    /// Refining the design surface.
+    Refine,
+    /// Growing the normal vectors and cutting them with the swept surface.
+    Measure,
+}
+
+/// Progress callback: `(stage, done, total)`; `done == total` ends a stage. Called from the
+/// calling thread between chunks of work.
+pub type StageProgress<'a> = &'a (dyn Fn(Stage, usize, usize) + Sync);
+
+/// [`verify`] reporting progress; the result is the same.
+///
+/// # Errors
+/// As [`verify`].
+pub fn verify_with_progress(
+    part: &Mesh,
+    toolpath: &Toolpath,
+    cutter: &Cutter,
+    cfg: &VerifyConfig,
+    progress: Option<StageProgress<'_>>,
+) -> Result<Verification, VerifyError> {
+    let report_stage = |st: Stage, done: usize, total: usize| {
+        if let Some(p) = progress {
+            p(st, done, total);
+        }
+    };
     let e = cfg.resolution_mm;
     if !(e.is_finite() && e > 0.0) {
         return Err(VerifyError::Config(format!(
@@ -301,6 +335,7 @@ pub fn verify(
     let mut timings = Timings::default();
 
     let t = Instant::now();
+    report_stage(Stage::Sweep, 0, 1);
     let swept = SweepModel::new(toolpath, cutter, &cfg.sweep);
     if swept.pieces.is_empty() {
         return Err(VerifyError::NothingSwept);
@@ -317,6 +352,8 @@ pub fn verify(
         )
     });
     timings.sweep_s = t.elapsed().as_secs_f64();
+    report_stage(Stage::Sweep, 1, 1);
+    report_stage(Stage::Refine, 0, 1);
 
     let t = Instant::now();
     let mut rcfg = RefineConfig::for_cutter(cutter, e);
@@ -338,12 +375,21 @@ pub fn verify(
         }
     }
     timings.refine_s = t.elapsed().as_secs_f64();
+    report_stage(Stage::Refine, 1, 1);
 
     let t = Instant::now();
     let mut models = vec![&swept];
     models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
     // Inner vector lengths clipped to the material (thin walls, skins open to the sky).
-    let mut m = measure::measure(&refined, &models, toolpath, &cfg.deviation, cfg.surface)?;
+    let measure_progress = |done: usize, total: usize| report_stage(Stage::Measure, done, total);
+    let mut m = measure::measure_progress(
+        &refined,
+        &models,
+        toolpath,
+        &cfg.deviation,
+        cfg.surface,
+        &measure_progress,
+    )?;
     // The part's triangles, for the vectors' material checks and the depths at edges.
     let part_bvh = TriangleBvh::new(part.triangles());
     let inner = clip_to_material(

@@ -185,3 +185,36 @@ fn a_flipped_face_reads_depths_not_false_gouges() {
         );
     }
 }
+
+/// `verify_with_progress` reports every stage in order, ends the measurement at the number
+/// of refined vertices, and gives the same report as `verify`.
+#[test]
+fn progress_reports_every_stage_and_changes_nothing() {
+    use std::sync::Mutex;
+    let cutter = Cutter::ball(6.0).unwrap();
+    let mut cfg = VerifyConfig::new(0.01);
+    cfg.resolution_mm = 0.02;
+    let plain = verify(&block(), &pass(0.0, -0.05), &cutter, &cfg).unwrap();
+    let seen: Mutex<Vec<(cam_verify::Stage, usize, usize)>> = Mutex::new(Vec::new());
+    let report = |st, done, total| seen.lock().unwrap().push((st, done, total));
+    let v =
+        cam_verify::verify_with_progress(&block(), &pass(0.0, -0.05), &cutter, &cfg, Some(&report))
+            .unwrap();
+    assert_eq!(
+        serde_json::to_string(&v.report).unwrap(),
+        serde_json::to_string(&plain.report).unwrap()
+    );
+    let seen = seen.into_inner().unwrap();
+    use cam_verify::Stage::{Measure, Refine, Sweep};
+    assert_eq!(
+        &seen[..4],
+        &[(Sweep, 0, 1), (Sweep, 1, 1), (Refine, 0, 1), (Refine, 1, 1)]
+    );
+    let n = v.refined.positions.len();
+    assert!(
+        seen[4..]
+            .iter()
+            .all(|&(st, d, t)| st == Measure && d <= t && t == n)
+    );
+    assert_eq!(seen.last(), Some(&(Measure, n, n)));
+}
