@@ -29,6 +29,7 @@ fn bench(c: &mut Criterion) {
         crease_angle_deg: 30.0,
         max_vertices: None,
         on_cap: CapPolicy::Error,
+        region: None,
     };
     let mut g = c.benchmark_group("deviation");
     g.sample_size(10);

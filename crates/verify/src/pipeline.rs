@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use cam_core::{Cutter, Mesh, Toolpath};
+use cam_core::{Cutter, DVec3, Mesh, Toolpath};
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError, TriangleBvh};
 use crate::material;
@@ -35,6 +35,10 @@ pub struct VerifyConfig {
     /// The swept surface measured against: the imprint surface's crossings refined onto the
     /// exact swept volume (default), or the paper's piecewise-linear surface itself.
     pub surface: SurfaceModel,
+    /// Refine the whole design surface, not only where a normal vector can meet the swept
+    /// volume (same deviations; more vertices, for a finely coloured `--deviation` mesh of
+    /// parts the path covers only in part).
+    pub refine_everywhere: bool,
 }
 
 impl VerifyConfig {
@@ -48,6 +52,7 @@ impl VerifyConfig {
             back_gouge: true,
             max_vertices: Some(20_000_000),
             surface: SurfaceModel::Exact,
+            refine_everywhere: false,
         }
     }
 }
@@ -277,6 +282,32 @@ pub fn verify(
     verify_with_progress(part, toolpath, cutter, cfg, None)
 }
 
+/// The box (`[x0, y0, z0, x1, y1, z1]`, mm) holding every point within `reach` mm of the
+/// volume swept by the cutter's end along the feed moves (tips and the points `R` up the
+/// axis, grown by `R + reach`), `None` without feed moves.
+fn swept_region(toolpath: &Toolpath, cutter: &Cutter, reach: f64) -> Option<[f64; 6]> {
+    let r = cutter.radius();
+    let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    for w in toolpath.moves.windows(2) {
+        if w[1].kind == cam_core::MoveKind::Rapid {
+            continue;
+        }
+        for p in [w[0].pose, w[1].pose] {
+            for q in [p.tip, p.tip + r * p.axis] {
+                lo = lo.min(q);
+                hi = hi.max(q);
+            }
+        }
+    }
+    if !(lo.is_finite() && hi.is_finite() && reach.is_finite()) {
+        return None;
+    }
+    // A relative margin for rounding.
+    let grow = r + reach + 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
+    let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
+    Some([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z])
+}
+
 /// A stage of [`verify_with_progress`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
@@ -358,6 +389,16 @@ pub fn verify_with_progress(
     let t = Instant::now();
     let mut rcfg = RefineConfig::for_cutter(cutter, e);
     rcfg.max_vertices = cfg.max_vertices;
+    // Only where a normal vector can meet the swept volume: elsewhere every vertex reads
+    // "nothing swept" however finely the surface is refined (on pycam-textbox with a 40 mm
+    // square of passes, the box's sides and bottom were most of 2.6 million vertices).
+    if !cfg.refine_everywhere {
+        rcfg.region = swept_region(
+            toolpath,
+            cutter,
+            cfg.deviation.inside_mm.max(cfg.deviation.outside_mm),
+        );
+    }
     // One averaged normal per vertex, creases included: at a convex edge a face normal runs
     // along the neighbouring face (e.g. the top face's normal at a pocket rim runs down the
     // wall), where the swept surface of a pass along that face is tangent and any rounding

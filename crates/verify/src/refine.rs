@@ -46,6 +46,11 @@ pub struct RefineConfig {
     pub max_vertices: Option<usize>,
     /// What to do when the cap is hit.
     pub on_cap: CapPolicy,
+    /// Only faces meeting this box `[x0, y0, z0, x1, y1, z1]` (mm) are refined (and their
+    /// neighbours as far as conforming bisection needs); `None` refines everything. A
+    /// verification passes the box within which a normal vector can meet the swept volume:
+    /// outside it no vertex can read anything but "nothing swept".
+    pub region: Option<[f64; 6]>,
 }
 
 impl RefineConfig {
@@ -58,6 +63,7 @@ impl RefineConfig {
             crease_angle_deg: 30.0,
             max_vertices: Some(20_000_000),
             on_cap: CapPolicy::Error,
+            region: None,
         }
     }
 }
@@ -285,7 +291,7 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
     let area: f64 = mesh.triangles().iter().map(|t| t.area()).sum();
     let mut s = cfg.max_edge_mm;
     loop {
-        match split_edges(&welded_pos, &welded_tris, s, cfg.max_vertices) {
+        match split_edges(&welded_pos, &welded_tris, s, cfg.max_vertices, cfg.region) {
             Ok((pos, tris, src)) => {
                 let (positions, normals, triangles) =
                     vertex_normals(mesh, &pos, &tris, &src, cfg.crease_angle_deg);
@@ -355,7 +361,15 @@ fn split_edges(
     tris0: &[[u32; 3]],
     s: f64,
     cap: Option<usize>,
+    region: Option<[f64; 6]>,
 ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>), usize> {
+    // Whether a face meets the region (its box against the region's).
+    let inside = |pos: &[DVec3], t: &[u32; 3]| {
+        let Some(r) = region else { return true };
+        let [a, b, c] = t.map(|i| pos[i as usize]);
+        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+        lo.x <= r[3] && hi.x >= r[0] && lo.y <= r[4] && hi.y >= r[1] && lo.z <= r[5] && hi.z >= r[2]
+    };
     let s2 = s * s;
     let mut pos = pos0.to_vec();
     if let Some(c) = cap
@@ -369,6 +383,9 @@ fn split_edges(
     let mut done_src: Vec<u32> = Vec::with_capacity(tris0.len());
     let mut tris = tris0.to_vec();
     let mut src: Vec<u32> = (0..tris0.len() as u32).collect();
+    // Faces outside the region with an edge longer than s: split only when a neighbour's
+    // split reaches them (to stay conforming), else final once nothing is active.
+    let mut dormant: Vec<([u32; 3], u32, usize)> = Vec::new();
     loop {
         let mut active = Vec::with_capacity(tris.len());
         let mut active_src = Vec::with_capacity(tris.len());
@@ -376,20 +393,48 @@ fn split_edges(
         for (t, &sidx) in tris.iter().zip(&src) {
             let k = longest_edge(&pos, t);
             if pos[t[k] as usize].distance_squared(pos[t[(k + 1) % 3] as usize]) > s2 {
-                active.push(*t);
-                active_src.push(sidx);
-                longest.push(k);
+                if inside(&pos, t) {
+                    active.push(*t);
+                    active_src.push(sidx);
+                    longest.push(k);
+                } else {
+                    dormant.push((*t, sidx, k));
+                }
             } else {
                 done.push(*t);
                 done_src.push(sidx);
             }
         }
         if active.is_empty() {
+            for (t, sidx, _) in dormant {
+                done.push(t);
+                done_src.push(sidx);
+            }
             return Ok((pos, done, done_src));
         }
         let mut marked: IntMap<u64, u32> = IntMap::default();
         for (t, &k) in active.iter().zip(&longest) {
             marked.insert(edge_key(t[k], t[(k + 1) % 3]), u32::MAX);
+        }
+        // Dormant faces reached by a marked edge join this round (and mark their longest).
+        loop {
+            let mut woke = false;
+            let mut still = Vec::with_capacity(dormant.len());
+            for (t, sidx, k) in dormant.drain(..) {
+                if (0..3).any(|j| marked.contains_key(&edge_key(t[j], t[(j + 1) % 3]))) {
+                    marked.insert(edge_key(t[k], t[(k + 1) % 3]), u32::MAX);
+                    active.push(t);
+                    active_src.push(sidx);
+                    longest.push(k);
+                    woke = true;
+                } else {
+                    still.push((t, sidx, k));
+                }
+            }
+            dormant = still;
+            if !woke {
+                break;
+            }
         }
         // Closure: a face with any marked edge marks its longest one. (A marked edge is
         // longer than s, so a face holding it has a longest edge longer than s and marked

@@ -11,6 +11,7 @@ fn refined(tris: Vec<Triangle>, s: f64) -> RefinedMesh {
         crease_angle_deg: 30.0,
         max_vertices: None,
         on_cap: CapPolicy::Error,
+        region: None,
     };
     refine::refine(&m, &cfg).unwrap()
 }

@@ -11,6 +11,7 @@ fn cfg(s: f64) -> RefineConfig {
         crease_angle_deg: 30.0,
         max_vertices: None,
         on_cap: CapPolicy::Error,
+        region: None,
     }
 }
 
@@ -336,4 +337,63 @@ proptest::proptest! {
         };
         proptest::prop_assert_eq!(on_edge(0), on_edge(1));
     }
+}
+
+/// With a region, only faces meeting it (and the neighbours conforming bisection pulls in)
+/// are refined: a 10 mm cube refined near its top face only keeps edges ≤ s there, stays
+/// conforming (every edge shared by exactly two faces) and on its sources, and has far fewer
+/// vertices than the whole cube refined.
+#[test]
+fn region_refines_only_where_asked_and_stays_conforming() {
+    let m = cube(10.0);
+    let s = 0.5;
+    let full = refine::refine(&m, &cfg(s)).unwrap();
+    let b = m.bounds();
+    let top = b.max.z;
+    let region = [
+        b.min.x - 1.0,
+        b.min.y - 1.0,
+        top - 0.1,
+        b.max.x + 1.0,
+        b.max.y + 1.0,
+        top + 1.0,
+    ];
+    let part = refine::refine(
+        &m,
+        &RefineConfig {
+            region: Some(region),
+            ..cfg(s)
+        },
+    )
+    .unwrap();
+    on_source(&part, &m);
+    // Faces meeting the region: edges ≤ s.
+    for t in &part.triangles {
+        let p = t.map(|i| part.positions[i as usize]);
+        if p.iter().any(|q| q.z >= top - 0.1) {
+            for k in 0..3 {
+                let d = p[k].distance(p[(k + 1) % 3]);
+                assert!(d <= s * (1.0 + 1e-12), "edge {d} in the region");
+            }
+        }
+    }
+    // Conforming: every undirected edge (by position) is used by exactly two faces.
+    let key = |a: cam_core::DVec3, b: cam_core::DVec3| {
+        let (a, b) = (
+            a.to_array().map(f64::to_bits),
+            b.to_array().map(f64::to_bits),
+        );
+        if a <= b { (a, b) } else { (b, a) }
+    };
+    let mut count = std::collections::HashMap::new();
+    for t in &part.triangles {
+        let p = t.map(|i| part.positions[i as usize]);
+        for k in 0..3 {
+            *count.entry(key(p[k], p[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    assert!(count.values().all(|&c| c == 2), "not conforming");
+    let (nf, np) = (full.positions.len(), part.positions.len());
+    eprintln!("region refinement: {np} vertices against {nf} for the whole cube");
+    assert!(np * 3 < nf, "{np} vs {nf}");
 }

@@ -106,6 +106,7 @@ fn coloured() -> (RefinedMesh, Vec<Deviation>) {
             crease_angle_deg: 30.0,
             max_vertices: None,
             on_cap: CapPolicy::Error,
+            region: None,
         },
     )
     .unwrap();
