@@ -848,7 +848,9 @@ const PROOF_ROUNDS: usize = 40;
 /// vertical, the flat's gouge measure) must be at most τ. Where it is not, the exact sample
 /// at the highest point goes into the profile and the pass is marched again. Moves whose
 /// excess side is certified too are then proven; the rest stay counted as sampled. Surfaces
-/// that cannot tell leave the march as it was.
+/// that cannot tell leave the march as it was. Should the rounds run out with a move still
+/// rising above τ, its rise goes into the pass's bound ([`Marched::max_dev`]), so the plan
+/// reports it rather than hiding it among the sampled moves.
 pub(crate) fn prove_moves(
     s: &dyn ClSurface,
     f: &Raster,
@@ -863,6 +865,8 @@ pub(crate) fn prove_moves(
     }
     let key = |ua: f64, ub: f64| (ua.to_bits(), ub.to_bits());
     let mut proven: std::collections::HashMap<(u64, u64), f64> = Default::default();
+    // Moves found to rise above τ (kept only if the rounds run out before they are split).
+    let mut failed: std::collections::HashMap<(u64, u64), f64> = Default::default();
     let z_of = |p: &Profile, u: f64| {
         let j = p.pts.partition_point(|q| q.0 < u);
         p.pts.get(j).filter(|q| q.0 == u).map(|q| q.1)
@@ -888,7 +892,10 @@ pub(crate) fn prove_moves(
                 Some((rise, _)) if rise <= chk.tau => {
                     proven.insert(key(ua, ub), rise.max(0.0));
                 }
-                Some((_, at)) => split.push(ua + at * (ub - ua)),
+                Some((rise, at)) => {
+                    failed.insert(key(ua, ub), rise);
+                    split.push(ua + at * (ub - ua));
+                }
             }
         }
         if split.is_empty() {
@@ -919,13 +926,15 @@ pub(crate) fn prove_moves(
         *p = refine(s, f, v, std::mem::take(p), chk);
         m = march(p, chk);
     }
-    // Recount with the proofs.
+    // Recount with the proofs; a move still known to rise above τ reports that rise.
     for &(ua, ub, excess_sampled) in &m.gouge_sampled {
         if let Some(&rise) = proven.get(&key(ua, ub)) {
             m.max_dev = m.max_dev.max(rise);
             if !excess_sampled {
                 m.sampled_moves -= 1;
             }
+        } else if let Some(&rise) = failed.get(&key(ua, ub)) {
+            m.max_dev = m.max_dev.max(rise);
         }
     }
     m
