@@ -95,76 +95,58 @@ impl DropCutter {
             (-k * n.x, -k * n.y)
         };
         let (ca, cb) = ((a.0 + ox, a.1 + oy), (b.0 + ox, b.1 + oy));
-        // Cells the segment passes through (conservatively: cells whose rectangle comes
-        // within half a cell of the segment); each lists every triangle within R of it.
         let (x0, x1) = (a.0.min(b.0), a.0.max(b.0));
         let (y0, y1) = (a.1.min(b.1), a.1.max(b.1));
-        let ci = |v: f64, o: f64, n: usize| {
-            (((v - o) / self.cell).floor().max(0.0) as usize).min(n.saturating_sub(1))
-        };
-        let (i0, i1) = (ci(x0, self.ox, self.nx), ci(x1, self.ox, self.nx));
-        let (j0, j1) = (ci(y0, self.oy, self.ny), ci(y1, self.oy, self.ny));
         let mut rise = 0.0f64;
         let mut cover: Vec<(f64, f64)> = Vec::new();
         let reach_box = (x0 - big_r, y0 - big_r, x1 + big_r, y1 + big_r);
         let seg = (b.0 - a.0, b.1 - a.1);
         let seg_len2 = seg.0 * seg.0 + seg.1 * seg.1;
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let (rx0, ry0) = (
-                    self.ox + i as f64 * self.cell,
-                    self.oy + j as f64 * self.cell,
-                );
-                let (rx1, ry1) = (rx0 + self.cell, ry0 + self.cell);
-                if seg_rect_dist2(a, b, (rx0, ry0, rx1, ry1)) > 0.0 {
+        for (c, (rx0, ry0, rx1, ry1)) in self.cells_on_segment(a, b) {
+            // Lowest the plane gets over the cell grown by R: a triangle whose top is
+            // below it lies under the plane (and is not coplanar).
+            let gx = [rx0 - big_r, rx1 + big_r];
+            let gy = [ry0 - big_r, ry1 + big_r];
+            let mut plane_lo = f64::INFINITY;
+            for &x in &gx {
+                for &y in &gy {
+                    plane_lo = plane_lo.min((d - n.x * x - n.y * y) / n.z);
+                }
+            }
+            let slots = &self.items[self.start[c] as usize..self.start[c + 1] as usize];
+            for &s in slots {
+                let t = &self.tris[s as usize];
+                if t.top < plane_lo - COPLANAR_MM {
+                    break;
+                }
+                // Quick reject: bounding boxes more than R apart.
+                if t.lo[0] > reach_box.2
+                    || t.hi[0] < reach_box.0
+                    || t.lo[1] > reach_box.3
+                    || t.hi[1] < reach_box.1
+                {
                     continue;
                 }
-                // Lowest the plane gets over the cell grown by R: a triangle whose top is
-                // below it lies under the plane (and is not coplanar).
-                let gx = [rx0 - big_r, rx1 + big_r];
-                let gy = [ry0 - big_r, ry1 + big_r];
-                let mut plane_lo = f64::INFINITY;
-                for &x in &gx {
-                    for &y in &gy {
-                        plane_lo = plane_lo.min((d - n.x * x - n.y * y) / n.z);
-                    }
-                }
-                let c = j * self.nx + i;
-                let slots = &self.items[self.start[c] as usize..self.start[c + 1] as usize];
-                for &s in slots {
-                    let t = &self.tris[s as usize];
-                    if t.top < plane_lo - COPLANAR_MM {
-                        break;
-                    }
-                    // Quick reject: bounding boxes more than R apart.
-                    if t.lo[0] > reach_box.2
-                        || t.hi[0] < reach_box.0
-                        || t.lo[1] > reach_box.3
-                        || t.hi[1] < reach_box.1
+                let h = t.v.map(|p| n.dot(p) - d);
+                let hmax = h[0].max(h[1]).max(h[2]);
+                if hmax <= COPLANAR_MM {
+                    let hmin = h[0].min(h[1]).min(h[2]);
+                    if hmin >= -COPLANAR_MM
+                        && let Some(iv) = clip_segment_triangle(ca, cb, &t.v)
                     {
-                        continue;
+                        cover.push(iv);
                     }
-                    let h = t.v.map(|p| n.dot(p) - d);
-                    let hmax = h[0].max(h[1]).max(h[2]);
-                    if hmax <= COPLANAR_MM {
-                        let hmin = h[0].min(h[1]).min(h[2]);
-                        if hmin >= -COPLANAR_MM
-                            && let Some(iv) = clip_segment_triangle(ca, cb, &t.v)
-                        {
-                            cover.push(iv);
-                        }
-                        continue; // at or below the plane: cannot raise the cutter
-                    }
-                    // Rises above the plane: does it come within reach of the segment?
-                    let dx = seg_rect_dist2(a, b, (t.lo[0], t.lo[1], t.hi[0], t.hi[1]));
-                    if dx > big_r * big_r {
-                        continue;
-                    }
-                    if hmax > max_rise_mm {
-                        return None;
-                    }
-                    rise = rise.max(hmax);
+                    continue; // at or below the plane: cannot raise the cutter
                 }
+                // Rises above the plane: does it come within reach of the segment?
+                let dx = seg_rect_dist2(a, b, (t.lo[0], t.lo[1], t.hi[0], t.hi[1]));
+                if dx > big_r * big_r {
+                    continue;
+                }
+                if hmax > max_rise_mm {
+                    return None;
+                }
+                rise = rise.max(hmax);
             }
         }
         let covered = if seg_len2 == 0.0 {
@@ -189,6 +171,42 @@ impl DropCutter {
             rise_mm: rise.max(0.0),
             covered,
         })
+    }
+}
+
+impl DropCutter {
+    /// The index cells the XY segment `a → b` passes through, with their rectangles
+    /// `(x0, y0, x1, y1)` (mm): each lists every triangle within the cutter radius of it.
+    pub(crate) fn cells_on_segment(
+        &self,
+        a: (f64, f64),
+        b: (f64, f64),
+    ) -> Vec<(usize, (f64, f64, f64, f64))> {
+        let ci = |v: f64, o: f64, n: usize| {
+            (((v - o) / self.cell).floor().max(0.0) as usize).min(n.saturating_sub(1))
+        };
+        let (i0, i1) = (
+            ci(a.0.min(b.0), self.ox, self.nx),
+            ci(a.0.max(b.0), self.ox, self.nx),
+        );
+        let (j0, j1) = (
+            ci(a.1.min(b.1), self.oy, self.ny),
+            ci(a.1.max(b.1), self.oy, self.ny),
+        );
+        let mut out = Vec::new();
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let (rx0, ry0) = (
+                    self.ox + i as f64 * self.cell,
+                    self.oy + j as f64 * self.cell,
+                );
+                let rect = (rx0, ry0, rx0 + self.cell, ry0 + self.cell);
+                if seg_rect_dist2(a, b, rect) == 0.0 {
+                    out.push((j * self.nx + i, rect));
+                }
+            }
+        }
+        out
     }
 }
 

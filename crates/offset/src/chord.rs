@@ -62,28 +62,10 @@ impl DropCutter {
         }
         // Triangles within reach: the cells the segment crosses list every triangle within
         // R of them.
-        let (x0, x1) = (a.0.min(b.0), a.0.max(b.0));
-        let (y0, y1) = (a.1.min(b.1), a.1.max(b.1));
-        let ci = |v: f64, o: f64, n: usize| {
-            (((v - o) / self.cell).floor().max(0.0) as usize).min(n.saturating_sub(1))
-        };
-        let (i0, i1) = (ci(x0, self.ox, self.nx), ci(x1, self.ox, self.nx));
-        let (j0, j1) = (ci(y0, self.oy, self.ny), ci(y1, self.oy, self.ny));
         let mut slots: Vec<u32> = Vec::new();
-        for j in j0..=j1 {
-            for i in i0..=i1 {
-                let (rx0, ry0) = (
-                    self.ox + i as f64 * self.cell,
-                    self.oy + j as f64 * self.cell,
-                );
-                if seg_rect_dist2(a, b, (rx0, ry0, rx0 + self.cell, ry0 + self.cell)) > 0.0 {
-                    continue;
-                }
-                let c = j * self.nx + i;
-                slots.extend_from_slice(
-                    &self.items[self.start[c] as usize..self.start[c + 1] as usize],
-                );
-            }
+        for (c, _) in self.cells_on_segment(a, b) {
+            slots
+                .extend_from_slice(&self.items[self.start[c] as usize..self.start[c + 1] as usize]);
         }
         slots.sort_unstable();
         slots.dedup();
