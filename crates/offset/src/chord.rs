@@ -6,8 +6,10 @@
 //! ([`DropCutter::triangle_drop`]), and each of those is concave along a straight line (the
 //! triangle's Minkowski sum with the reflected cutter is convex). So the CL minus the chord,
 //! per triangle, is a concave function of the position along the move: its maximum is found
-//! by golden-section search on the interval where the triangle is within reach, and the
-//! move's value is the largest over the triangles within reach, pruned by each triangle's top.
+//! by golden-section search on the interval where the triangle is within reach (stopped as
+//! soon as secants extended past their points, which lie above a concave function, bound it
+//! below the best height found so far), and the move's value is the largest over the
+//! triangles within reach, those whose top cannot beat the best skipped.
 
 use crate::certify::seg_rect_dist2;
 use crate::index::DropCutter;
