@@ -123,6 +123,23 @@ pub fn rs274_available() -> bool {
     std::env::split_paths(&path).any(|d| d.join("rs274").is_file())
 }
 
+/// For test suites that run programs through `rs274`: `true` when it is on `PATH`; when it
+/// is not, `false` (the caller skips, with a note on stderr), except under `CI=true`, where
+/// a missing interpreter is a failure (`.ci/run` installs it).
+///
+/// # Panics
+/// When `rs274` is missing and the environment has `CI=true`.
+pub fn rs274_for_tests() -> bool {
+    if rs274_available() {
+        return true;
+    }
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("rs274 is not on PATH but CI=true: install linuxcnc-uspace (see .ci/run)");
+    }
+    eprintln!("rs274 not on PATH: skipping the real-client test (CI=true makes this a failure)");
+    false
+}
+
 /// Runs `rs274` with the default [`Rs274Config`] on `ngc_path`; the canon text goes next to it
 /// (`<ngc_path>.canon.txt`). Returns the straight motions in order.
 ///

@@ -5,26 +5,15 @@
 //! (`CI=true`), where a missing `rs274` fails the test.
 
 use cam_core::{Mesh, MoveKind, Units};
-use cam_gcode::rs274::{CanonKind, rs274_available, run_rs274};
+use cam_gcode::rs274::{CanonKind, rs274_for_tests, run_rs274};
 use cam_gcode::{Post, PostJob, post_to_string};
 use cam_plan::{PlanConfig, plan_part};
 
 use crate::support::root;
 
-fn rs274_here() -> bool {
-    if rs274_available() {
-        return true;
-    }
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("rs274 is not on PATH but CI=true: install linuxcnc-uspace (see .ci/run)");
-    }
-    eprintln!("rs274 not on PATH: skipping the real-client test (CI=true makes this a failure)");
-    false
-}
-
 #[test]
 fn planned_programs_run_in_rs274_and_reproduce_the_tips() {
-    if !rs274_here() {
+    if !rs274_for_tests() {
         return;
     }
     let mesh = Mesh::load(root().join("fixtures/parts/dome.obj"), Units::Mm).unwrap();

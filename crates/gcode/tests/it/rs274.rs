@@ -5,19 +5,8 @@
 use crate::post::job;
 use crate::support::{mv, small_path};
 use cam_core::{MoveKind, Toolpath, Units};
-use cam_gcode::rs274::{CanonKind, Rs274Error, rs274_available, run_rs274};
+use cam_gcode::rs274::{CanonKind, Rs274Error, rs274_for_tests, run_rs274};
 use cam_gcode::{Post, post_to_string};
-
-fn rs274_here() -> bool {
-    if rs274_available() {
-        return true;
-    }
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("rs274 is not on PATH but CI=true: install linuxcnc-uspace (see .ci/run)");
-    }
-    eprintln!("rs274 not on PATH: skipping the real-client test (CI=true makes this a failure)");
-    false
-}
 
 /// Zig-zag rows over a spherical cap (R 40) with retract/rapid links: 8 rows × 41 points.
 fn cap_path() -> Toolpath {
@@ -48,7 +37,7 @@ fn cap_path() -> Toolpath {
 
 #[test]
 fn rs274_runs_every_post_and_reproduces_the_tool_tips() {
-    if !rs274_here() {
+    if !rs274_for_tests() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -98,7 +87,7 @@ fn rs274_runs_every_post_and_reproduces_the_tool_tips() {
 
 #[test]
 fn rs274_errors_are_reported() {
-    if !rs274_here() {
+    if !rs274_for_tests() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -132,7 +121,7 @@ impl Rng {
 fn rs274_agrees_with_the_reader_on_arcs() {
     use cam_gcode::{ReadConfig, parse_gcode};
     use std::f64::consts::TAU;
-    if !rs274_here() {
+    if !rs274_for_tests() {
         return;
     }
     const PLANES: [(u32, usize, usize, usize); 3] = [(17, 0, 1, 2), (18, 2, 0, 1), (19, 1, 2, 0)];
