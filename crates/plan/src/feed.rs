@@ -289,6 +289,12 @@ enum Action {
     TestUpper(f64),
 }
 
+/// The value (mm) of contact piece `piece` at `u` on the pass at `v` ([`ClSurface::piece_z`]).
+fn piece_at(s: &dyn ClSurface, f: &Raster, v: f64, piece: u32, u: f64) -> Option<f64> {
+    let (x, y) = xy(f, u, v);
+    s.piece_z(piece, x, y)
+}
+
 /// Where the contact pieces of samples `a` and `b` cross between them (mm along `u`): at a
 /// crease of the CL surface (two pieces meeting in a V) this is the crease, and a sample
 /// there certifies both halves (each then has a piece equal to its end's z at both ends).
@@ -306,10 +312,7 @@ fn crease_at(
         return None;
     }
     // g(u) = f_a(u) − f_b(u): > 0 at u_a (f_a = z_a ≥ f_b), < 0 at u_b.
-    let g = |u: f64| {
-        let (x, y) = xy(f, u, v);
-        Some(s.piece_z(pa, x, y)? - s.piece_z(pb, x, y)?)
-    };
+    let g = |u: f64| Some(piece_at(s, f, v, pa, u)? - piece_at(s, f, v, pb, u)?);
     let (mut lo, mut hi) = (ua, ub);
     if !(g(lo)? > 0.0 && g(hi)? < 0.0) {
         return None;
@@ -344,12 +347,8 @@ fn dip_bound(
     if pa == pb {
         return Some(0.0);
     }
-    let at = |piece: u32, u: f64| {
-        let (x, y) = xy(f, u, v);
-        s.piece_z(piece, x, y)
-    };
-    let ga = at(pa, ub).map_or(f64::INFINITY, |z| cb.z - z);
-    let gb = at(pb, ua).map_or(f64::INFINITY, |z| ca.z - z);
+    let ga = piece_at(s, f, v, pa, ub).map_or(f64::INFINITY, |z| cb.z - z);
+    let gb = piece_at(s, f, v, pb, ua).map_or(f64::INFINITY, |z| ca.z - z);
     if ga <= 0.0 || gb <= 0.0 {
         return Some(0.0);
     }
