@@ -129,15 +129,7 @@ fn same_plan_for_one_and_many_threads() {
     let mut c = cfg(ball);
     c.scallop_mm = 0.05;
     c.angle_deg = 30.0;
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let four = rayon::ThreadPoolBuilder::new()
-        .num_threads(4)
-        .build()
-        .unwrap();
-    let a = one.install(|| plan(&s, &sampler, &c, None).unwrap());
-    let b = four.install(|| plan(&s, &sampler, &c, None).unwrap());
+    let a = crate::on_threads(1, || plan(&s, &sampler, &c, None).unwrap());
+    let b = crate::on_threads(4, || plan(&s, &sampler, &c, None).unwrap());
     assert_eq!(a, b);
 }

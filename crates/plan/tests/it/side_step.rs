@@ -304,16 +304,8 @@ fn bull_on_a_slope_along_the_passes_same_plan_for_one_and_many_threads() {
     c.scallop_mm = 0.05;
     // Passes at 30° to the cylinder's axis: its slope shows along the passes too.
     c.angle_deg = 30.0;
-    let one = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
-    let four = rayon::ThreadPoolBuilder::new()
-        .num_threads(4)
-        .build()
-        .unwrap();
-    let a = one.install(|| plan(&s, &sampler, &c, None).unwrap());
-    let b = four.install(|| plan(&s, &sampler, &c, None).unwrap());
+    let a = crate::on_threads(1, || plan(&s, &sampler, &c, None).unwrap());
+    let b = crate::on_threads(4, || plan(&s, &sampler, &c, None).unwrap());
     assert!(a.passes > 5, "{} passes", a.passes);
     assert_eq!(a, b);
 }
