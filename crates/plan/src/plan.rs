@@ -210,6 +210,8 @@ fn plan_passes(
         c,
         cfg.max_step_mm.unwrap_or(f64::INFINITY),
     );
+    // A flat end mill's moves are proven by the exact rise where the surface gives one (a
+    // surface that cannot answers `None` for any move, so one degenerate move tells).
     chk.exact_gouge = cutter.corner_radius() == 0.0
         && surface
             .chord_rise((0.0, 0.0), (0.0, 0.0), 0.0, 0.0, 0.0)
