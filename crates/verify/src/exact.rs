@@ -274,78 +274,128 @@ pub fn capsule_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry>
     best.map(|(s, normal)| Entry { s, normal })
 }
 
-/// The minimum over `u ∈ [0, 1]` of `dist(y − u·d, disk) ` (disk about the origin, axis `k`)
-/// with the minimiser and the gradient direction there. The function is convex in `u`; its
-/// derivative `−g·d` is continuous and non-decreasing where the distance is positive.
-fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3) -> (f64, DVec3, f64) {
+/// The inner minimisation along a move stops when a step moves the point by at most this
+/// much (mm): the distance is then exact to rounding (it is quadratic about its minimum),
+/// and the direction to within this over the distance (which matters for a flat end mill's
+/// disk, where Newton's last iterate outside lies a hair from it).
+const STEP_TOL_MM: f64 = 1e-13;
+
+/// The minimum over `u ∈ [0, 1]` of `dist(y − u·d, disk)` (disk about the origin, axis `k`)
+/// with the minimiser and the gradient direction there, searched from `guess` (a nearby
+/// minimiser, e.g. the previous one along a line; any value in `[0, 1]` is correct).
+///
+/// The distance `D` is convex in `u`, so `φ = D²/2` is too, with `φ' = e·ρ' − z·z_d` and
+/// `φ'' = ρ'² + e·ρ'' + z_d²` (`z = y·k − u·z_d` the axial offset, `ρ` the radial one,
+/// `e = ρ − a` where positive, else 0). Newton's method on `φ'` kept inside a bracket of the
+/// minimiser (bisection when a step leaves it) converges quadratically; it stops when a step
+/// moves the point by at most [`STEP_TOL_MM`] along the move.
+fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3, guess: f64) -> (f64, DVec3, f64) {
     let at = |u: f64| puck.disk_distance(y - u * d, k);
+    let dd = d.length_squared();
+    if dd == 0.0 {
+        let (dist, g) = at(0.0);
+        return (dist, g, 0.0);
+    }
+    let dl = dd.sqrt();
+    let (z0, dz) = (y.dot(k), d.dot(k));
     // A level move (d ⟂ k): the axial offset is the same for every u and the distance
     // grows with the radial one, so the minimiser is the nearest point of the segment in
     // the disk's plane.
-    let dd = d.length_squared();
-    let dl = dd.sqrt();
-    if d.dot(k) == 0.0 && dd > 0.0 {
-        let u = ((y - y.dot(k) * k).dot(d) / dd).clamp(0.0, 1.0);
+    if dz == 0.0 {
+        let u = ((y - z0 * k).dot(d) / dd).clamp(0.0, 1.0);
         let (dist, g) = at(u);
         return (dist, g, u);
     }
-    let slope = |g: DVec3| -g.dot(d);
-    let (d0, g0) = at(0.0);
-    if slope(g0) >= 0.0 || d0 == 0.0 {
-        return (d0, g0, 0.0);
-    }
-    let (d1, g1) = at(1.0);
-    if slope(g1) <= 0.0 || d1 == 0.0 {
-        return (d1, g1, 1.0);
-    }
-    // Illinois on the slope, bracket [a, b] with slope(a) < 0 < slope(b).
-    let (mut a, mut b) = (0.0f64, 1.0f64);
-    let (mut fa, mut fb) = (slope(g0), slope(g1));
-    let mut best = if d0 <= d1 {
-        (d0, g0, 0.0)
-    } else {
-        (d1, g1, 1.0)
+    let (h0, dh) = (y - z0 * k, d - dz * k);
+    let dh2 = dh.length_squared();
+    let a = puck.a;
+    // φ'(u), φ''(u).
+    let deriv = |u: f64| -> (f64, f64) {
+        let z = z0 - u * dz;
+        let h = h0 - u * dh;
+        let rho = h.length();
+        if rho <= a {
+            (-z * dz, dz * dz)
+        } else {
+            let rp = -h.dot(dh) / rho;
+            let rpp = (dh2 - rp * rp).max(0.0) / rho;
+            let e = rho - a;
+            (e * rp - z * dz, rp * rp + e * rpp + dz * dz)
+        }
     };
-    let mut side = 0i8;
-    for it in 0..100 {
-        let mut t = if it % 5 == 4 {
-            0.5 * (a + b)
-        } else {
-            (a * fb - b * fa) / (fb - fa)
-        };
-        if !(t > a && t < b) {
-            t = 0.5 * (a + b);
-        }
-        let (dt, gt) = at(t);
-        if dt < best.0 {
-            best = (dt, gt, t);
-        }
-        let ft = slope(gt);
-        if ft == 0.0 || dt == 0.0 {
-            return (dt, gt, t);
-        }
-        if ft > 0.0 {
-            b = t;
-            fb = ft;
-            if side == 1 {
-                fa *= 0.5;
+    if a == 0.0 {
+        // The distance to a point: the segment's nearest point.
+        let u = (y.dot(d) / dd).clamp(0.0, 1.0);
+        let (dist, g) = at(u);
+        return (dist, g, u);
+    }
+    // φ is smooth except where the segment crosses the rim's cylinder (ρ = a); inside it
+    // φ = z²/2, whose slope is known in closed form. Bracket the minimiser in one smooth
+    // piece: Newton then converges quadratically (across the kink, where φ'' jumps, it
+    // would crawl by bisection).
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    if let Some((t1, t2)) = disk_interval(h0, -dh, a) {
+        let (u1, u2) = (t1.max(0.0), t2.min(1.0));
+        if u1 <= u2 {
+            let slope = |u: f64| -(z0 - u * dz) * dz;
+            if slope(u1) >= 0.0 {
+                hi = u1;
+            } else if slope(u2) <= 0.0 {
+                lo = u2;
+            } else {
+                // The axial offset vanishes within the rim: the segment meets the disk.
+                let u = (z0 / dz).clamp(u1, u2);
+                let (dist, g) = at(u);
+                return (dist, g, u);
             }
-            side = 1;
-        } else {
-            a = t;
-            fa = ft;
-            if side == -1 {
-                fb *= 0.5;
-            }
-            side = -1;
         }
-        // The bracket in mm along the move: the distance found is within |d|·(b − a) of
-        // the minimum (its slope is at most |d|), so 1e-13 mm is below every tolerance.
-        if (b - a) * dl <= 1e-13 {
+    }
+    let (p_lo, p_hi) = (lo, hi);
+    // φ' at the bracket's ends once known (< 0 at `lo`, > 0 at `hi`).
+    let (mut f_lo, mut f_hi) = (None::<f64>, None::<f64>);
+    let mut u = if guess.is_finite() {
+        guess.clamp(lo, hi)
+    } else {
+        0.5 * (lo + hi)
+    };
+    for _ in 0..100 {
+        let (f1, f2) = deriv(u);
+        if f1 == 0.0 || f1.is_nan() {
+            break;
+        }
+        if f1 > 0.0 {
+            (hi, f_hi) = (u, Some(f1));
+        } else {
+            (lo, f_lo) = (u, Some(f1));
+        }
+        if hi <= lo {
+            // At an end of the piece with the slope pointing out of it.
+            u = lo;
+            break;
+        }
+        let mut next = u - f1 / f2;
+        if !(next > lo && next < hi) {
+            // Newton leaves the bracket: an end of the piece not yet tried, else the secant
+            // through the bracket's ends (the root is often right at one of them), else
+            // its middle.
+            next = match (f_lo, f_hi) {
+                (None, _) if next <= lo => p_lo,
+                (_, None) if next >= hi => p_hi,
+                (Some(fl), Some(fh)) => lo - fl * (hi - lo) / (fh - fl),
+                _ => 0.5 * (lo + hi),
+            };
+            if !(next >= lo && next <= hi) {
+                next = 0.5 * (lo + hi);
+            }
+        }
+        let step = (next - u).abs() * dl;
+        u = next;
+        if step <= STEP_TOL_MM || (hi - lo) * dl <= STEP_TOL_MM {
             break;
         }
     }
-    best
+    let (dist, g) = at(u);
+    (dist, g, u)
 }
 
 /// First entry of `line` into the puck swept along the straight, non-rotating move of the
@@ -501,8 +551,11 @@ pub fn convex_translation_entry(
     k: DVec3,
 ) -> Option<Entry> {
     let d = c1 - c0;
+    // Along the line the minimiser moves little from one Newton iterate to the next.
+    let mut guess = 0.5;
     let f = |s: f64| {
-        let (dist, g, _) = segment_disk_min(puck, line.at(s) - c0, d, k);
+        let (dist, g, u) = segment_disk_min(puck, line.at(s) - c0, d, k, guess);
+        guess = u;
         (dist - puck.r, g)
     };
     first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
@@ -601,7 +654,7 @@ impl MoveGeometry {
         if self.is_translation() {
             let (c0, k) = self.centre_axis(0.0);
             let (c1, _) = self.centre_axis(1.0);
-            let (d, _, _) = segment_disk_min(&self.puck, p - c0, c1 - c0, k);
+            let (d, _, _) = segment_disk_min(&self.puck, p - c0, c1 - c0, k, 0.5);
             return (r - d).max(0.0);
         }
         let dist = |u: f64| {
