@@ -105,6 +105,22 @@ pub(crate) fn facet(pf: &Profile, x: f64, y: f64, v: &[DVec3; 3], n: DVec3) -> O
     Some((z_tip, DVec3::new(cx, cy, zc)))
 }
 
+/// Tool-tip z (mm) of the cutter at `(x, y)` tangent to the whole plane through `v0` with
+/// upward unit normal `n` (`n.z > 0`): an upper bound of its contact with any part of that
+/// plane (the tangency lies within the cutter's reach).
+#[inline]
+pub(crate) fn plane_tip(pf: &Profile, x: f64, y: f64, v0: DVec3, n: DVec3) -> f64 {
+    let nxy = (n.x * n.x + n.y * n.y).sqrt();
+    let (cx, cy) = if nxy <= 1e-15 {
+        (x, y)
+    } else {
+        let k = pf.a / nxy + pf.r;
+        (x - k * n.x, y - k * n.y)
+    };
+    let zc = v0.z - (n.x * (cx - v0.x) + n.y * (cy - v0.y)) / n.z;
+    zc - pf.r + pf.r * n.z
+}
+
 /// Point-in-triangle test in the XY projection, edges included.
 #[inline]
 fn inside_xy(v: &[DVec3; 3], x: f64, y: f64) -> bool {
@@ -135,12 +151,23 @@ pub(crate) fn edge(pf: &Profile, x: f64, y: f64, p1: DVec3, p2: DVec3, best: f64
     if d > pf.big_r {
         return None;
     }
+    let m = (p2.z - p1.z) / len; // dz per XY mm along the edge
     // Every point of the edge is at least d from the axis, so the cutter stands at least
     // h(d) above the tip there: the contact cannot beat max z - h(d).
-    if p1.z.max(p2.z) - pf.height(d) <= best {
+    let hd = pf.height(d);
+    if p1.z.max(p2.z) - hd <= best {
         return None;
     }
-    let m = (p2.z - p1.z) / len; // dz per XY mm along the edge
+    let torus = pf.a > 0.0 && pf.r > 0.0;
+    if torus {
+        // Tighter, worth its square root before the torus's iterative contact: only the
+        // stretch within R of the axis can touch, so its highest z less h(d).
+        let w = (pf.big_r2 - d * d).max(0.0).sqrt();
+        let (s0, s1) = ((u0 - w).max(0.0), (u0 + w).min(len));
+        if s0 > s1 || p1.z + m * (if m > 0.0 { s1 } else { s0 }) - hd <= best {
+            return None;
+        }
+    }
     // Offset t from the foot to the contact (sign of m: the contact is uphill) and the
     // cutter height h there.
     let (t, h) = if pf.a <= 0.0 {
@@ -164,6 +191,7 @@ pub(crate) fn edge(pf: &Profile, x: f64, y: f64, p1: DVec3, p2: DVec3, best: f64
         };
         (t, 0.0)
     } else {
+        debug_assert!(torus);
         torus_edge(pf, d, m)
     };
     let s = u0 + t;

@@ -281,6 +281,16 @@ impl DropCutter {
             if d2 > 0.0 && t.top - pf.height(d2.sqrt()) <= prune {
                 continue;
             }
+            // The cutter resting on the triangle's plane stands at least as high as on any
+            // part of it (facet, edges, vertices): nothing here can beat that. Worth its cost
+            // for a bull, whose edge contacts are iterative.
+            if pf.a > 0.0
+                && pf.r > 0.0
+                && t.n.z > 1e-12
+                && contact::plane_tip(pf, x, y, t.v[0], t.n) <= prune
+            {
+                continue;
+            }
             for (k, &p) in t.v.iter().enumerate() {
                 if t.owns & (8 << k) != 0 && p.z > best && p.z >= floor {
                     take(
