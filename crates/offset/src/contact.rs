@@ -208,7 +208,7 @@ pub(crate) fn edge(pf: &Profile, x: f64, y: f64, p1: DVec3, p2: DVec3, best: f64
 /// With the corner angle φ (ρ = a + r·sin φ, h = r·(1 − cos φ), h' = tan φ) the stationarity
 /// of `z(t) − h(ρ(t))` reads `g(φ) = tan φ · t/ρ − |m| = 0`, `t = sqrt(ρ² − d²)`; `g` is
 /// increasing on `[φ_lo, π/2)`, negative at `φ_lo` and unbounded above, so a Newton
-/// iteration safeguarded by bisection converges to the unique root (to 1e-14 rad).
+/// iteration safeguarded by bisection converges to the unique root (steps of 1e-15 rad).
 #[inline]
 fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
     let (a, r) = (pf.a, pf.r);
@@ -254,6 +254,12 @@ fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
             lo = phi;
         }
         let newton = phi - v / dv;
+        // Converged: the step is below the tolerance (it may land on the bracket's end
+        // just set to φ, which must not send the search back to bisecting).
+        if newton.is_finite() && (newton - phi).abs() <= 1e-15 {
+            phi = newton.clamp(lo, hi);
+            break;
+        }
         let next = if newton.is_finite() && newton > lo && newton < hi {
             newton
         } else {
