@@ -163,6 +163,11 @@ fn newton(a: f64, b: f64, guess: f64, f: impl Fn(f64) -> (f64, f64)) -> f64 {
             return x;
         }
         let mut nx = x - fx / dfx;
+        // Converged: a Newton step below the tolerance ends the search, even where it lands
+        // on the bracket's end just set to x (bisecting then would start over).
+        if nx.is_finite() && (nx - x).abs() <= 1e-15 * (1.0 + x.abs()) {
+            return nx.clamp(neg.min(pos), neg.max(pos));
+        }
         if !(nx.is_finite() && inside(nx, neg, pos)) {
             nx = 0.5 * (neg + pos);
         }
