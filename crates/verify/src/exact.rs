@@ -374,6 +374,12 @@ fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3, guess: f64) -> (f
             break;
         }
         let mut next = u - f1 / f2;
+        // Converged: a step below the tolerance ends the search, even where it lands on the
+        // bracket's end just set to u (falling back to the bracket would start over).
+        if next.is_finite() && (next - u).abs() * dl <= STEP_TOL_MM {
+            u = next.clamp(lo, hi);
+            break;
+        }
         if !(next > lo && next < hi) {
             // Newton leaves the bracket: an end of the piece not yet tried, else the secant
             // through the bracket's ends (the root is often right at one of them), else
