@@ -63,22 +63,32 @@ impl ArcSpec {
         }
     }
 
-    /// Chord end points (excluding `start`, ending exactly at `end`) such that no chord
-    /// deviates from the arc by more than `tolerance_mm` (sagitta `r(1 - cos(δ/2))`).
-    /// The radius is interpolated linearly from the start to the end radius (they agree
-    /// within the reader's radius tolerance); the normal axis linearly with the angle.
-    pub(crate) fn chord_points(&self, tolerance_mm: f64) -> Vec<DVec3> {
-        let (a, b, n) = self.plane.axes();
+    /// How many chords [`ArcSpec::chord_points`] returns (at least 1), as a float: huge or
+    /// infinite where the radius is absurd for the tolerance.
+    pub(crate) fn chord_count(&self, tolerance_mm: f64) -> f64 {
         let (r0, r1) = self.radii();
         let r = r0.max(r1);
-        let sweep = self.sweep();
-        let a0 = (self.start[b] - self.centre[1]).atan2(self.start[a] - self.centre[0]);
         let dmax = if tolerance_mm >= r {
             PI
         } else {
             (2.0 * (1.0 - tolerance_mm / r).acos()).min(PI)
         };
-        let count = ((sweep.abs() / dmax).ceil() as usize).max(1);
+        (self.sweep().abs() / dmax).ceil().max(1.0)
+    }
+
+    /// Chord end points (excluding `start`, ending exactly at `end`) such that no chord
+    /// deviates from the arc by more than `tolerance_mm` (sagitta `r(1 - cos(δ/2))`).
+    /// The radius is interpolated linearly from the start to the end radius (they agree
+    /// within the reader's radius tolerance); the normal axis linearly with the angle.
+    ///
+    /// Callers bound [`ArcSpec::chord_count`] first: an absurd radius asks for more chords
+    /// than memory holds.
+    pub(crate) fn chord_points(&self, tolerance_mm: f64) -> Vec<DVec3> {
+        let (a, b, n) = self.plane.axes();
+        let (r0, r1) = self.radii();
+        let sweep = self.sweep();
+        let a0 = (self.start[b] - self.centre[1]).atan2(self.start[a] - self.centre[0]);
+        let count = self.chord_count(tolerance_mm) as usize;
         let mut out = Vec::with_capacity(count);
         for i in 1..=count {
             if i == count {

@@ -48,6 +48,15 @@ impl Default for ReadConfig {
     }
 }
 
+/// Most chords one arc may become. At the default tolerance (0.001 mm) a full circle of
+/// radius 200 km needs about this many; more means the centre words are wrong, and the
+/// chords would not fit in memory.
+pub const MAX_ARC_CHORDS: f64 = 1.0e6;
+
+/// Most moves a program may expand to (arcs counted by their chords): about 1.6 GB of
+/// [`Move`]s.
+pub const MAX_MOVES: f64 = 2.0e7;
+
 /// Reads the G-code file at `path` (see [`parse_gcode`]); errors carry the path.
 ///
 /// # Errors
@@ -532,8 +541,24 @@ impl<'a> State<'a> {
                 ),
             ));
         }
+        let tol = self.cfg.arc_tolerance_mm;
+        let chords = spec.chord_count(tol);
+        if !(chords <= MAX_ARC_CHORDS && self.moves.len() as f64 + chords <= MAX_MOVES) {
+            return Err(e(
+                col,
+                &format!(
+                    "arc of radius {:.6} mm sweeping {:.3}° needs {chords:.3e} chords to stay \
+                     within the arc tolerance {tol} mm: more than the {} allowed per arc ({} per \
+                     program); check its centre words",
+                    r0.max(r1),
+                    spec.sweep().abs().to_degrees(),
+                    MAX_ARC_CHORDS,
+                    MAX_MOVES
+                ),
+            ));
+        }
         let feed = self.feed_mm();
-        for p in spec.chord_points(self.cfg.arc_tolerance_mm) {
+        for p in spec.chord_points(tol) {
             self.push(MoveKind::Cut, p, feed, line);
         }
         self.pos = [Some(end.x), Some(end.y), Some(end.z)];

@@ -184,3 +184,31 @@ fn inch_arcs_are_converted() {
         cam_core::assert_near!(m.feed_mm_per_min.unwrap(), 254.0, 1e-12);
     }
 }
+
+/// An arc whose radius is absurd for the tolerance (a centre word a few digits too long)
+/// would need more chords than memory holds: it is an error naming the line, found by
+/// fuzzing, where the reader used to allocate until it died. A large but sane arc is not.
+#[test]
+fn absurd_arcs_are_errors_not_allocations() {
+    let known = ReadConfig {
+        initial_position_mm: Some(glam::DVec3::ZERO),
+        ..ReadConfig::default()
+    };
+    for (text, line) in [
+        ("G2J7777777777", 1),
+        ("G21 G90\nG0 X0 Y0 Z0\nG2 I9999999999900\n", 3),
+        ("G3 X0 Y0 I1000000000000000000000000000000 J0", 1),
+    ] {
+        let err = match parse_gcode(text, &known) {
+            Ok(tp) => panic!("{text}: parsed into {} moves", tp.moves.len()),
+            Err(e) => e,
+        };
+        assert_eq!(err.line, line, "{text}: {err}");
+        assert!(err.message.contains("chords"), "{text}: {err}");
+    }
+    // A full circle of 1 km radius: 70k chords within 0.001 mm.
+    let tp = parse_gcode("G21 G90\nG0 X0 Y0 Z0\nG2 I1000000 J0\n", &known).unwrap();
+    let n = (TAU / (2.0 * (1.0f64 - 0.001 / 1e6).acos())).ceil() as usize;
+    assert_eq!(tp.moves.len() - 1, n);
+    assert!(n > 70_000, "{n}");
+}
