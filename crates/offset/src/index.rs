@@ -130,6 +130,117 @@ const FLOOR_MARGIN: f64 = 1e-9;
 
 /// Upper bound on the number of index cells (memory guard for tiny tools on huge parts).
 const MAX_CELLS: f64 = 4.0e6;
+/// Upper bound on the cell lists' total length, unless the triangles themselves need more
+/// ([`ITEMS_PER_TRIANGLE`] each): long sliver triangles listed in every cell they span
+/// would otherwise take gigabytes.
+const MAX_ITEMS: u64 = 1 << 26;
+/// Cell-list entries allowed per triangle on top of [`MAX_ITEMS`].
+const ITEMS_PER_TRIANGLE: u64 = 8;
+
+/// The XY bucket grid: cells of `cell` mm, `nx` × `ny` from the origin, and the CSR lists.
+struct CellGrid {
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl CellGrid {
+    /// Lists each triangle (by slot) in every cell within `big_r` of its XY box. Cells of
+    /// half the cutter radius, grown until the grid has at most [`MAX_CELLS`] cells and the
+    /// lists at most [`MAX_ITEMS`] entries (or [`ITEMS_PER_TRIANGLE`] per triangle): bounded
+    /// memory for any part, however large or thin its triangles.
+    fn build(tris: &[Tri], (ox, oy): (f64, f64), (w, h): (f64, f64), big_r: f64) -> CellGrid {
+        let dims = |c: f64| {
+            let n = |len: f64| ((len / c).floor() + 1.0).max(1.0);
+            (n(w), n(h))
+        };
+        let fits = |c: f64| {
+            let (fx, fy) = dims(c);
+            fx * fy <= MAX_CELLS
+        };
+        let mut cell = 0.5 * big_r;
+        if !fits(cell) {
+            // The area's share, and no side longer than the whole budget.
+            let even = w.sqrt() * h.sqrt() / MAX_CELLS.sqrt();
+            cell = even.max(w / MAX_CELLS).max(h / MAX_CELLS).max(cell);
+            for _ in 0..200 {
+                if fits(cell) {
+                    break;
+                }
+                cell *= 1.25;
+            }
+        }
+        let budget = MAX_ITEMS.max(ITEMS_PER_TRIANGLE * tris.len() as u64);
+        let (mut nx, mut ny);
+        loop {
+            let (fx, fy) = dims(cell);
+            (nx, ny) = (fx as usize, fy as usize);
+            let total: u64 = tris
+                .iter()
+                .map(|t| {
+                    let (x0, x1, y0, y1) = span(t, (ox, oy), cell, (nx, ny), big_r);
+                    ((x1 - x0 + 1) * (y1 - y0 + 1)) as u64
+                })
+                .sum();
+            // Once the whole part fits a cell, coarser cells cannot shorten the lists.
+            if total <= budget || (nx <= 2 && ny <= 2) {
+                break;
+            }
+            cell *= 2.0;
+        }
+        let mut count = vec![0u32; nx * ny + 1];
+        for t in tris {
+            let (x0, x1, y0, y1) = span(t, (ox, oy), cell, (nx, ny), big_r);
+            for j in y0..=y1 {
+                for i in x0..=x1 {
+                    count[j * nx + i + 1] += 1;
+                }
+            }
+        }
+        for k in 1..count.len() {
+            count[k] += count[k - 1];
+        }
+        let start = count;
+        let mut fill = start.clone();
+        let mut items = vec![0u32; start[nx * ny] as usize];
+        for (slot, t) in tris.iter().enumerate() {
+            let (x0, x1, y0, y1) = span(t, (ox, oy), cell, (nx, ny), big_r);
+            for j in y0..=y1 {
+                for i in x0..=x1 {
+                    let c = j * nx + i;
+                    items[fill[c] as usize] = slot as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        CellGrid {
+            cell,
+            nx,
+            ny,
+            start,
+            items,
+        }
+    }
+}
+
+/// The cells `(x0, x1, y0, y1)` (inclusive) within `big_r` of a triangle's XY box.
+fn span(
+    t: &Tri,
+    (ox, oy): (f64, f64),
+    cell: f64,
+    (nx, ny): (usize, usize),
+    big_r: f64,
+) -> (usize, usize, usize, usize) {
+    let c = |v: f64, o: f64, n: usize| (((v - o) / cell).floor().max(0.0) as usize).min(n - 1);
+    (
+        c(t.lo[0] - big_r, ox, nx),
+        c(t.hi[0] + big_r, ox, nx),
+        c(t.lo[1] - big_r, oy, ny),
+        c(t.hi[1] + big_r, oy, ny),
+    )
+}
 
 impl DropCutter {
     /// Prepares `mesh` for dropping `cutter` (axis +Z).
@@ -166,48 +277,13 @@ impl DropCutter {
         let b = mesh.bounds();
         let (ox, oy) = (b.min.x - big_r, b.min.y - big_r);
         let (w, h) = (b.size().x + 2.0 * big_r, b.size().y + 2.0 * big_r);
-        // Cells of half the cutter radius, grown if the grid would be too large.
-        let mut cell = 0.5 * big_r;
-        if (w / cell) * (h / cell) > MAX_CELLS {
-            cell = (w * h / MAX_CELLS).sqrt();
-        }
-        let nx = ((w / cell).floor() as usize + 1).max(1);
-        let ny = ((h / cell).floor() as usize + 1).max(1);
-        let span = |t: &Tri| {
-            let c =
-                |v: f64, o: f64, n: usize| (((v - o) / cell).floor().max(0.0) as usize).min(n - 1);
-            (
-                c(t.lo[0] - big_r, ox, nx),
-                c(t.hi[0] + big_r, ox, nx),
-                c(t.lo[1] - big_r, oy, ny),
-                c(t.hi[1] + big_r, oy, ny),
-            )
-        };
-        let mut count = vec![0u32; nx * ny + 1];
-        for t in &tris {
-            let (x0, x1, y0, y1) = span(t);
-            for j in y0..=y1 {
-                for i in x0..=x1 {
-                    count[j * nx + i + 1] += 1;
-                }
-            }
-        }
-        for k in 1..count.len() {
-            count[k] += count[k - 1];
-        }
-        let start = count;
-        let mut fill = start.clone();
-        let mut items = vec![0u32; start[nx * ny] as usize];
-        for (slot, t) in tris.iter().enumerate() {
-            let (x0, x1, y0, y1) = span(t);
-            for j in y0..=y1 {
-                for i in x0..=x1 {
-                    let c = j * nx + i;
-                    items[fill[c] as usize] = slot as u32;
-                    fill[c] += 1;
-                }
-            }
-        }
+        let CellGrid {
+            cell,
+            nx,
+            ny,
+            start,
+            items,
+        } = CellGrid::build(&tris, (ox, oy), (w, h), big_r);
         DropCutter {
             cutter,
             pf,
@@ -415,5 +491,73 @@ impl DropCutter {
     /// Approximate heap bytes held by the index (triangle data and cell lists).
     pub fn heap_bytes(&self) -> usize {
         self.tris.len() * std::mem::size_of::<Tri>() + (self.start.len() + self.items.len()) * 4
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use cam_core::{Mesh, Triangle};
+
+    fn mesh(tris: Vec<Triangle>) -> Mesh {
+        Mesh::from_triangles(tris, "<memory>").expect("mesh")
+    }
+
+    /// The drop over every triangle alone, maximised: the index must not lose any.
+    fn brute(dc: &DropCutter, x: f64, y: f64, n: usize) -> Option<f64> {
+        (0..n as u32)
+            .filter_map(|t| dc.triangle_drop(t, x, y))
+            .max_by(f64::total_cmp)
+    }
+
+    /// A fan of long sliver triangles, each spanning the whole part (found by fuzzing: 1100
+    /// of them overflowed the u32 cell lists, 300 took 4.7 GB): the lists stay within their
+    /// budget, and the drops still see every triangle.
+    #[test]
+    fn sliver_fans_keep_the_cell_lists_bounded_and_exact() {
+        let n = 1100;
+        let tris: Vec<Triangle> = (0..n)
+            .map(|i| {
+                Triangle::new(
+                    DVec3::ZERO,
+                    DVec3::new(3000.0, 3000.0, 0.0),
+                    DVec3::new(3000.0, i as f64 * 0.001, (i % 7) as f64),
+                )
+            })
+            .collect();
+        let dc = DropCutter::new(&mesh(tris), "ball:6".parse().unwrap());
+        let budget = MAX_ITEMS.max(ITEMS_PER_TRIANGLE * n as u64);
+        assert!(
+            dc.items.len() as u64 <= budget,
+            "{} entries",
+            dc.items.len()
+        );
+        assert!((dc.nx * dc.ny) as f64 <= MAX_CELLS);
+        for (x, y) in [(1500.0, 1.0), (2999.0, 0.3), (2000.0, 1500.0), (10.0, 0.0)] {
+            assert_eq!(dc.drop(x, y), brute(&dc, x, y, n), "at ({x}, {y})");
+        }
+    }
+
+    /// A part a kilometre long and a millimetre wide: the grid's cell count is bounded with
+    /// its extra row and column counted (the old guard bounded only the area's share).
+    #[test]
+    fn long_thin_parts_keep_the_grid_bounded() {
+        let tris = vec![
+            Triangle::new(
+                DVec3::ZERO,
+                DVec3::new(1.0e6, 0.0, 0.0),
+                DVec3::new(0.0, 0.0, 1000.0),
+            ),
+            Triangle::new(
+                DVec3::new(0.0, 1.0, 0.0),
+                DVec3::new(1.0e6, 1.0, 5.0),
+                DVec3::new(1.0e6, 0.0, 5.0),
+            ),
+        ];
+        let dc = DropCutter::new(&mesh(tris), "ball:6".parse().unwrap());
+        assert!((dc.nx * dc.ny) as f64 <= MAX_CELLS, "{} x {}", dc.nx, dc.ny);
+        for x in [0.5, 12345.6, 999_999.0] {
+            assert_eq!(dc.drop(x, 0.5), brute(&dc, x, 0.5, 2), "at x = {x}");
+        }
     }
 }
