@@ -45,6 +45,23 @@ pub enum MeshError {
         /// The offending value as read.
         value: f64,
     },
+    /// A coordinate lies beyond [`crate::mesh::MAX_COORD_MM`] of the origin (after scaling to
+    /// mm): no machinable part is that large, and the planner's grids would not fit in memory.
+    #[error(
+        "{}{}: coordinate {value:e} mm is beyond ±{limit_mm:e} mm (1 km) of the origin; check the part's units and origin",
+        path.display(),
+        location(None, *triangle)
+    )]
+    OutOfRange {
+        /// The file.
+        path: PathBuf,
+        /// 0-based triangle (in the order read).
+        triangle: Option<usize>,
+        /// The offending value in mm.
+        value: f64,
+        /// The limit (mm).
+        limit_mm: f64,
+    },
     /// The file holds no triangles at all.
     #[error("{}: the part has no triangles", path.display())]
     NoTriangles {

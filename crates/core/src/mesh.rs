@@ -103,10 +103,13 @@ pub struct LoadStats {
     pub degenerate_dropped: usize,
 }
 
+/// Largest distance (mm) of a part's coordinate from the origin along any axis: 1 km.
+pub const MAX_COORD_MM: f64 = 1.0e6;
+
 /// A validated part: a non-empty soup of finite, non-degenerate triangles in mm.
 ///
-/// Guarantees: at least one triangle; every coordinate finite; no triangle degenerate in the
-/// sense of [`Triangle::is_degenerate`].
+/// Guarantees: at least one triangle; every coordinate finite and within [`MAX_COORD_MM`];
+/// no triangle degenerate in the sense of [`Triangle::is_degenerate`].
 #[derive(Debug, Clone)]
 pub struct Mesh {
     triangles: Vec<Triangle>,
@@ -119,7 +122,8 @@ impl Mesh {
     /// Builds a mesh from triangles in mm, dropping degenerate ones.
     ///
     /// # Errors
-    /// [`MeshError::NonFinite`] if any coordinate is NaN or infinite, [`MeshError::NoTriangles`]
+    /// [`MeshError::NonFinite`] if any coordinate is NaN or infinite, [`MeshError::OutOfRange`]
+    /// if one lies beyond [`MAX_COORD_MM`] of the origin, [`MeshError::NoTriangles`]
     /// for an empty list, [`MeshError::AllDegenerate`] if nothing is left after dropping.
     /// `path` only labels the errors (use `"<memory>"` for generated meshes).
     pub fn from_triangles(
@@ -142,6 +146,14 @@ impl Mesh {
                             line: None,
                             triangle: Some(i),
                             value: c,
+                        });
+                    }
+                    if c.abs() > MAX_COORD_MM {
+                        return Err(MeshError::OutOfRange {
+                            path: path.to_path_buf(),
+                            triangle: Some(i),
+                            value: c,
+                            limit_mm: MAX_COORD_MM,
                         });
                     }
                 }
@@ -231,5 +243,35 @@ impl Mesh {
     /// Always false: a [`Mesh`] holds at least one triangle.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A coordinate beyond 1 km (a part read in the wrong units, or a corrupt file found by
+    /// fuzzing) is a typed error naming the triangle, not a part whose grids exhaust memory;
+    /// one at the limit is a part.
+    #[test]
+    fn coordinates_beyond_a_kilometre_are_errors() {
+        let tri = |x: f64| {
+            vec![Triangle::new(
+                DVec3::ZERO,
+                DVec3::new(x, 0.0, 0.0),
+                DVec3::new(0.0, 1.0, 0.0),
+            )]
+        };
+        assert!(Mesh::from_triangles(tri(MAX_COORD_MM), "<memory>").is_ok());
+        for x in [1.0e12, -2.0e6, 1.0e40] {
+            match Mesh::from_triangles(tri(x), "<memory>") {
+                Err(MeshError::OutOfRange {
+                    triangle, value, ..
+                }) => {
+                    assert_eq!((triangle, value), (Some(0), x));
+                }
+                other => panic!("{x}: {other:?}"),
+            }
+        }
     }
 }
