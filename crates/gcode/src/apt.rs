@@ -82,6 +82,9 @@ pub fn parse_apt(text: &str) -> Result<Toolpath, GcodeError> {
             "GOTO" | "FROM" => {
                 let v = s.numbers(3, 6)?;
                 let tip = DVec3::new(v[0], v[1], v[2]) * mm_per_unit;
+                for k in 0..3 {
+                    crate::reader::check_coordinate(tip[k], k, start_line, s.arg_col(k))?;
+                }
                 if v.len() == 6 {
                     let a = DVec3::new(v[3], v[4], v[5]);
                     axis = unit_axis(a).ok_or_else(|| s.err(s.arg_col(3), "tool axis is zero"))?;
@@ -124,6 +127,9 @@ pub fn parse_apt(text: &str) -> Result<Toolpath, GcodeError> {
                 let f = value.ok_or_else(|| s.err(s.col, "FEDRAT needs a feed value"))?;
                 if f <= 0.0 {
                     return Err(s.err(s.arg_col(0), "feed must be positive"));
+                }
+                if !(f * scale).is_finite() {
+                    return Err(s.err(s.arg_col(0), &format!("feed {f:e} is out of range")));
                 }
                 feed = Some(f * scale);
             }

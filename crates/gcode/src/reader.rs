@@ -57,6 +57,29 @@ pub const MAX_ARC_CHORDS: f64 = 1.0e6;
 /// [`Move`]s.
 pub const MAX_MOVES: f64 = 2.0e7;
 
+/// A tool position (mm) must lie within [`cam_core::mesh::MAX_COORD_MM`] of the origin, as a
+/// part's coordinates do: beyond that (a word a few digits too long, incremental moves adding
+/// up) it is an error at the word, not a pose the planner and verifier cannot hold.
+pub(crate) fn check_coordinate(
+    v: f64,
+    axis: usize,
+    line: usize,
+    col: usize,
+) -> Result<(), GcodeError> {
+    let limit = cam_core::mesh::MAX_COORD_MM;
+    if v.abs() <= limit {
+        return Ok(());
+    }
+    Err(GcodeError::new(
+        line,
+        col,
+        format!(
+            "{} coordinate {v:e} mm is beyond ±{limit:e} mm (1 km) of the origin",
+            ["X", "Y", "Z"][axis.min(2)]
+        ),
+    ))
+}
+
 /// Reads the G-code file at `path` (see [`parse_gcode`]); errors carry the path.
 ///
 /// # Errors
@@ -252,6 +275,10 @@ impl Block {
                     if w.value < 0.0 {
                         return Err(err(w, "negative feed rate".into()));
                     }
+                    // In inch programs too (25.4 mm per unit).
+                    if !(w.value * 25.4).is_finite() {
+                        return Err(err(w, format!("feed rate {:e} is out of range", w.value)));
+                    }
                     b.f = slot;
                 }
                 'H' => b.h = slot,
@@ -408,7 +435,7 @@ impl<'a> State<'a> {
         for (i, ti) in t.iter_mut().enumerate() {
             if let Some((v, col)) = b.axes[i] {
                 let v = v * self.mm_per_unit;
-                *ti = Some(if self.absolute {
+                let v = if self.absolute {
                     v
                 } else {
                     self.pos[i].ok_or_else(|| {
@@ -418,7 +445,9 @@ impl<'a> State<'a> {
                             "incremental (G91) move from an unknown position",
                         )
                     })? + v
-                });
+                };
+                check_coordinate(v, i, line, col)?;
+                *ti = Some(v);
             }
         }
         Ok(t)

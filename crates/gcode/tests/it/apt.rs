@@ -135,3 +135,16 @@ fn apt_errors_name_line_and_column() {
     let msg = read_apt(&p).unwrap_err().to_string();
     assert!(msg.starts_with(&format!("{}:2:1:", p.display())), "{msg}");
 }
+
+/// APT positions beyond 1 km and feeds that overflow are errors naming line and column
+/// (found by fuzzing: `UNITS/INCHES` then `GOTO/1e308,…` read as an infinite tip).
+#[test]
+fn apt_positions_beyond_a_kilometre_are_errors() {
+    let e = parse_apt("UNITS/INCHES\nGOTO/1e308,0,0\n").unwrap_err();
+    assert_eq!((e.line, e.col), (2, 6), "{e}");
+    assert!(e.message.contains("X coordinate inf mm"), "{e}");
+    let e = parse_apt("GOTO/0,0,2e6\n").unwrap_err();
+    assert!(e.message.contains("Z coordinate"), "{e}");
+    let e = parse_apt("FEDRAT/1e308,IPM\nGOTO/0,0,0\n").unwrap_err();
+    assert!(e.message.contains("feed"), "{e}");
+}

@@ -165,3 +165,32 @@ fn read_gcode_adds_the_path() {
     let e = read_gcode(dir.path().join("missing.ngc"), &ReadConfig::default()).unwrap_err();
     assert!(matches!(e, ReadError::Io { .. }));
 }
+
+/// Positions beyond 1 km of the origin, and feeds that overflow, are errors at the word
+/// (found by fuzzing: they read as infinite tips, which the planner and verifier cannot
+/// hold): an inch value scaled past f64, incremental moves adding up, a huge absolute word.
+/// A position at the limit reads.
+#[test]
+fn positions_beyond_a_kilometre_are_errors() {
+    let huge = format!("1{}", "0".repeat(308));
+    fails_at(
+        &format!("G20\nG0 X{huge} Y0 Z0\n"),
+        2,
+        4,
+        "X coordinate inf mm",
+    );
+    fails_at(
+        &format!("G0 X0 Y0 Z0\nG91\nG1 Y{huge} F100\nY{huge}\n"),
+        3,
+        4,
+        "Y coordinate",
+    );
+    fails_at("G0 X0 Y0 Z1000001\n", 1, 10, "Z coordinate 1.000001e6 mm");
+    fails_at(
+        &format!("G20 G0 X0 Y0 Z0\nG1 X1 F{huge}\n"),
+        2,
+        7,
+        "feed rate",
+    );
+    assert_eq!(tips("G0 X1000000 Y-1000000 Z0\n"), vec![[1e6, -1e6, 0.0]]);
+}
