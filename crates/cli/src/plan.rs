@@ -219,6 +219,17 @@ pub fn run(a: PlanArgs) -> Result<()> {
             2.0 * rounding
         );
     }
+    // Likewise a scallop height below the rounding cannot be held (nor checked), and the
+    // passes it asks for grow as 1/√h: 1e-9 mm would plan for days.
+    if a.scallop <= 2.0 * rounding {
+        anyhow::bail!(
+            "--scallop {} mm is below what a program in {} can hold: its coordinates are \
+             rounded by up to {rounding:.1e} mm; use at least {:.4} mm",
+            a.scallop,
+            a.gcode_units,
+            2.0 * rounding
+        );
+    }
     cfg.tolerance_mm = a.tolerance - rounding;
     let (assembly, chosen) = choose_tool(&a, &mesh, &cfg)?;
     let cutter = assembly.cutter;

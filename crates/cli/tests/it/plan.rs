@@ -140,6 +140,9 @@ fn plan_bad_values_exit_2() {
         vec!["--tolerance", "0"],
         vec!["--scallop", "-1"],
         vec!["--scallop", "3"],
+        // Below what a program's rounding can hold (1e-9 used to plan for days).
+        vec!["--scallop", "0.000000001"],
+        vec!["--tolerance", "0.000000000001"],
         vec!["--tool", "bull:6:4"],
         vec!["--feed", "nan"],
         vec!["--stock", "1,0,0,1"],
