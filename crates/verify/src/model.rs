@@ -129,6 +129,30 @@ fn move_length(a: &Pose, b: &Pose, cutter: &Cutter) -> f64 {
     a.tip.distance(b.tip) + a.axis.distance(b.axis) * cutter.radius()
 }
 
+/// How many poses [`SweepModel::new`] sweeps along `path` (each feed move subdivided as it
+/// does), computed without building them: callers bound the model's memory with it.
+pub fn pose_count(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> f64 {
+    let max_step = if cfg.max_step_mm.is_finite() && cfg.max_step_mm > 0.0 {
+        cfg.max_step_mm
+    } else {
+        f64::INFINITY
+    };
+    path.moves
+        .windows(2)
+        .filter(|w| {
+            w[1].kind != MoveKind::Rapid && !(cfg.rotating_only && w[0].pose.axis == w[1].pose.axis)
+        })
+        .map(|w| {
+            let len = move_length(&w[0].pose, &w[1].pose, cutter);
+            if len.is_finite() && max_step.is_finite() {
+                (len / max_step).ceil().clamp(1.0, 1.0e6)
+            } else {
+                1.0
+            }
+        })
+        .sum()
+}
+
 /// The stretches of consecutive feed moves, subdivided.
 fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch> {
     let max_step = if cfg.max_step_mm.is_finite() && cfg.max_step_mm > 0.0 {

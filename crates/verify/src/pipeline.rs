@@ -57,6 +57,11 @@ impl VerifyConfig {
     }
 }
 
+/// Most imprint points (both sweeps) a verification may compute: 1.4 GB of curves, and
+/// about 8 GB in all with what the measurement builds on them (mount_rush with bull:6:1.5,
+/// 5.8M points, peaks at 0.8 GB).
+pub const MAX_IMPRINT_POINTS: f64 = 6.0e7;
+
 /// Why a verification could not run.
 #[derive(Debug, thiserror::Error)]
 pub enum VerifyError {
@@ -361,6 +366,17 @@ pub fn verify_with_progress(
     if !(ms.is_finite() && ms > 0.0) {
         return Err(VerifyError::Config(format!(
             "max step {ms} mm must be a positive number of mm"
+        )));
+    }
+    // The imprint curves' memory: poses × points per curve, for both sweeps.
+    let points = crate::model::pose_count(toolpath, cutter, &cfg.sweep)
+        * (q / 2 + 1) as f64
+        * if cfg.back_gouge { 2.0 } else { 1.0 };
+    if points > MAX_IMPRINT_POINTS {
+        return Err(VerifyError::Config(format!(
+            "sweeping this path with {q} inserts at a max step of {ms} mm makes {points:.3e} \
+             imprint points, more than the {MAX_IMPRINT_POINTS:.0e} that fit in memory; use a \
+             larger max step or fewer inserts"
         )));
     }
     let mut timings = Timings::default();

@@ -254,3 +254,30 @@ fn refining_within_reach_changes_no_reading() {
     );
     assert!(near.refined.positions.len() * 2 < all.refined.positions.len());
 }
+
+/// Settings whose imprint curves would not fit in memory are a typed error before anything
+/// is swept (found probing the CLI: `--max-step 1e-9` hung and `--inserts 1000000` aborted
+/// on allocation).
+#[test]
+fn sweeps_too_large_for_memory_are_config_errors() {
+    let cutter = Cutter::ball(6.0).unwrap();
+    let path = pass(-10.0, 0.0);
+    for (step, q) in [(1e-9, 40), (0.5, 1_000_000)] {
+        let mut cfg = VerifyConfig::new(0.01);
+        cfg.sweep.max_step_mm = step;
+        cfg.sweep.inserts = q;
+        match verify(&block(), &path, &cutter, &cfg) {
+            Err(cam_verify::VerifyError::Config(m)) => {
+                assert!(m.contains("imprint points"), "{m}")
+            }
+            other => panic!(
+                "step {step}, Q {q}: {:?}",
+                other.map(|v| v.report.max_gouge_mm)
+            ),
+        }
+    }
+    // The count is the steps the sweep takes: a 5 mm plunge, 24 mm of cut and a 5 mm
+    // retract at 0.5 mm (the rapid is not swept).
+    let poses = cam_verify::model::pose_count(&path, &cutter, &VerifyConfig::new(0.01).sweep);
+    assert_eq!(poses, 10.0 + 48.0 + 10.0);
+}
