@@ -245,14 +245,19 @@ pub fn run(a: PlanArgs) -> Result<()> {
         .or(feeds.plunge_feed_mm_per_min)
         .unwrap_or(300.0);
     let rpm = a.rpm.or(feeds.rpm).unwrap_or(10000.0);
-    for (name, v) in [
-        ("--feed", feed),
-        ("--plunge-feed", plunge_feed),
-        ("--rpm", rpm),
-        ("--rapid-rate", a.rapid_rate),
+    // Upper limits far above any machine (1 km/min, a million rpm): beyond them a value is a
+    // typo, and a post would print it with hundreds of digits.
+    for (name, v, most) in [
+        ("--feed", feed, 1.0e6),
+        ("--plunge-feed", plunge_feed, 1.0e6),
+        ("--rpm", rpm, 1.0e6),
+        ("--rapid-rate", a.rapid_rate, 1.0e6),
     ] {
         if !(v.is_finite() && v > 0.0) {
             bail!("{name} must be a positive number, got {v}");
+        }
+        if v > most {
+            bail!("{name} {v:e} is above {most:e}");
         }
     }
     let pb = crate::progress::bar(0, "planning", a.json);

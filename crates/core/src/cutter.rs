@@ -36,6 +36,13 @@ pub struct Cutter {
 /// Flute length given to a cutter when none is named: this many diameters.
 pub const DEFAULT_FLUTE_DIAMETERS: f64 = 3.0;
 
+/// Smallest cutter diameter (mm) accepted: below the finest micro end mills.
+pub const MIN_DIAMETER_MM: f64 = 0.01;
+/// Largest cutter diameter (mm) accepted: above any face mill a finishing pass would use.
+pub const MAX_DIAMETER_MM: f64 = 1000.0;
+/// Smallest bull-nose corner radius (mm) accepted; below it the cutter is a flat end mill.
+pub const MIN_CORNER_RADIUS_MM: f64 = 0.001;
+
 fn bad(spec: &str, message: impl Into<String>) -> CutterSpecError {
     CutterSpecError {
         spec: spec.to_string(),
@@ -69,8 +76,9 @@ impl Cutter {
     /// General constructor; `flute_mm = None` gives [`DEFAULT_FLUTE_DIAMETERS`] × D.
     ///
     /// # Errors
-    /// On non-finite or non-positive sizes, a corner radius outside the family's range, or a
-    /// flute length shorter than the corner radius.
+    /// On non-finite or non-positive sizes, a diameter outside [`MIN_DIAMETER_MM`] to
+    /// [`MAX_DIAMETER_MM`], a corner radius outside the family's range (a bull's at least
+    /// [`MIN_CORNER_RADIUS_MM`]), or a flute length shorter than the corner radius.
     pub fn new(
         kind: CutterKind,
         diameter_mm: f64,
@@ -87,10 +95,27 @@ impl Cutter {
         if !(diameter_mm.is_finite() && diameter_mm > 0.0) {
             return Err(bad(&spec, "diameter must be a positive number of mm"));
         }
+        if !(MIN_DIAMETER_MM..=MAX_DIAMETER_MM).contains(&diameter_mm) {
+            return Err(bad(
+                &spec,
+                format!(
+                    "diameter {diameter_mm:e} mm is outside {MIN_DIAMETER_MM}–{MAX_DIAMETER_MM} mm"
+                ),
+            ));
+        }
         match kind {
             CutterKind::Bull => {
                 if !(corner_radius_mm.is_finite() && corner_radius_mm > 0.0) {
                     return Err(bad(&spec, "corner radius must be a positive number of mm"));
+                }
+                if corner_radius_mm < MIN_CORNER_RADIUS_MM {
+                    return Err(bad(
+                        &spec,
+                        format!(
+                            "corner radius {corner_radius_mm:e} mm is below {MIN_CORNER_RADIUS_MM} mm \
+                             (use flat:{diameter_mm})"
+                        ),
+                    ));
                 }
                 if corner_radius_mm >= diameter_mm / 2.0 {
                     return Err(bad(
@@ -256,8 +281,16 @@ mod tests {
             "flat:3:1",
             "ball:6,foo=1",
             "ball:inf",
+            // Out of range (ball:1e300 used to panic downstream).
+            "ball:1e300",
+            "flat:1001",
+            "ball:0.009",
+            "bull:6:0.0009",
         ] {
             assert!(s.parse::<Cutter>().is_err(), "{s} accepted");
+        }
+        for s in ["ball:0.01", "flat:1000", "bull:6:0.001"] {
+            assert!(s.parse::<Cutter>().is_ok(), "{s} rejected");
         }
     }
 

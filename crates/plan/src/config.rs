@@ -96,7 +96,8 @@ pub enum PlanError {
     /// Angle not finite.
     #[error("raster angle {0} degrees is not a finite number")]
     Angle(f64),
-    /// Safe Z not finite, or below the top of the toolpath.
+    /// Safe Z not finite, beyond 1 km ([`cam_core::mesh::MAX_COORD_MM`]), or below the top
+    /// of the toolpath.
     #[error("safe Z {safe_z} mm must be a number above the highest CL point {top} mm")]
     SafeZ {
         /// Requested safe Z (mm).
@@ -168,7 +169,7 @@ impl PlanConfig {
             return Err(PlanError::Angle(self.angle_deg));
         }
         if let Some(z) = self.safe_z_mm
-            && !z.is_finite()
+            && (!z.is_finite() || z.abs() > cam_core::mesh::MAX_COORD_MM)
         {
             return Err(PlanError::SafeZ {
                 safe_z: z,

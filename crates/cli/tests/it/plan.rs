@@ -144,6 +144,13 @@ fn plan_bad_values_exit_2() {
         vec!["--scallop", "0.000000001"],
         vec!["--tolerance", "0.000000000001"],
         vec!["--tool", "bull:6:4"],
+        // Out of any machine's range (found probing: ball:1e300 panicked, safe Z 1e300
+        // failed as an internal error, F1e300 was written).
+        vec!["--tool", "ball:1e300"],
+        vec!["--tool", "bull:6:0.000000001"],
+        vec!["--safe-z", "1e300"],
+        vec!["--feed", "1e300"],
+        vec!["--rpm", "1e300"],
         vec!["--feed", "nan"],
         vec!["--stock", "1,0,0,1"],
         vec!["--tool-library", "/nonexistent.json"],
