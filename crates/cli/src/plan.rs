@@ -230,6 +230,14 @@ pub fn run(a: PlanArgs) -> Result<()> {
             2.0 * rounding
         );
     }
+    if !a.no_verify && a.tolerance > cam_verify::pipeline::MAX_TOLERANCE_MM {
+        anyhow::bail!(
+            "--tolerance {} mm is above the {} mm the verification checks (its vectors reach 20 \
+             times the tolerance into the material); plan with --no-verify",
+            a.tolerance,
+            cam_verify::pipeline::MAX_TOLERANCE_MM
+        );
+    }
     cfg.tolerance_mm = a.tolerance - rounding;
     let (assembly, chosen) = choose_tool(&a, &mesh, &cfg)?;
     let cutter = assembly.cutter;

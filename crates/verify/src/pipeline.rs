@@ -57,6 +57,14 @@ impl VerifyConfig {
     }
 }
 
+/// Largest gouge tolerance (mm) a verification accepts. The normal vectors reach 20 times
+/// the tolerance into the material ([`DeviationConfig::for_tolerance`]), and every search
+/// walks their length: 1e300 mm made `cam verify` run for ever.
+pub const MAX_TOLERANCE_MM: f64 = 1.0;
+
+/// Longest normal vector (mm), inside or outside the part.
+pub const MAX_VECTOR_MM: f64 = 100.0;
+
 /// Most imprint points (both sweeps) a verification may compute: 1.4 GB of curves, and
 /// about 8 GB in all with what the measurement builds on them (mount_rush with bull:6:1.5,
 /// 5.8M points, peaks at 0.8 GB).
@@ -354,6 +362,20 @@ pub fn verify_with_progress(
     if !(tol.is_finite() && tol > 0.0) {
         return Err(VerifyError::Config(format!(
             "tolerance {tol} mm must be a positive number of mm"
+        )));
+    }
+    if tol > MAX_TOLERANCE_MM {
+        return Err(VerifyError::Config(format!(
+            "tolerance {tol} mm is above {MAX_TOLERANCE_MM} mm: the normal-vector check is for \
+             finishing (its vectors reach 20 times the tolerance into the material)"
+        )));
+    }
+    // The normal vectors' lengths set how far every search walks.
+    let (li, lo) = (cfg.deviation.inside_mm, cfg.deviation.outside_mm);
+    if !(li > 0.0 && lo > 0.0 && li <= MAX_VECTOR_MM && lo <= MAX_VECTOR_MM) {
+        return Err(VerifyError::Config(format!(
+            "normal vectors of {li} mm inside and {lo} mm outside must be positive and at \
+             most {MAX_VECTOR_MM} mm"
         )));
     }
     let q = cfg.sweep.inserts;

@@ -151,6 +151,8 @@ fn plan_bad_values_exit_2() {
         vec!["--safe-z", "1e300"],
         vec!["--feed", "1e300"],
         vec!["--rpm", "1e300"],
+        // Above what the verification checks (1e300 made `cam verify` run for ever).
+        vec!["--tolerance", "2"],
         vec!["--feed", "nan"],
         vec!["--stock", "1,0,0,1"],
         vec!["--tool-library", "/nonexistent.json"],

@@ -259,9 +259,24 @@ fn refining_within_reach_changes_no_reading() {
 /// is swept (found probing the CLI: `--max-step 1e-9` hung and `--inserts 1000000` aborted
 /// on allocation).
 #[test]
-fn sweeps_too_large_for_memory_are_config_errors() {
+fn settings_beyond_memory_or_reach_are_config_errors() {
     let cutter = Cutter::ball(6.0).unwrap();
     let path = pass(-10.0, 0.0);
+    // A gouge tolerance above 1 mm (the vectors reach 20 times it into the part: 1e300 ran
+    // for ever) and vectors longer than 100 mm.
+    for tol in [1.5, 1e300] {
+        let cfg = VerifyConfig::new(tol);
+        assert!(matches!(
+            verify(&block(), &path, &cutter, &cfg),
+            Err(cam_verify::VerifyError::Config(_))
+        ));
+    }
+    let mut cfg = VerifyConfig::new(0.01);
+    cfg.deviation.outside_mm = 1e9;
+    assert!(matches!(
+        verify(&block(), &path, &cutter, &cfg),
+        Err(cam_verify::VerifyError::Config(_))
+    ));
     for (step, q) in [(1e-9, 40), (0.5, 1_000_000)] {
         let mut cfg = VerifyConfig::new(0.01);
         cfg.sweep.max_step_mm = step;
