@@ -255,10 +255,25 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let rpm = a.rpm.or(feeds.rpm).unwrap_or(10000.0);
     // Upper limits far above any machine (1 km/min, a million rpm): beyond them a value is a
     // typo, and a post would print it with hundreds of digits.
+    let from = |flag: Option<f64>, name: &'static str, field: &'static str| {
+        if flag.is_some() { name } else { field }
+    };
     for (name, v, most) in [
-        ("--feed", feed, 1.0e6),
-        ("--plunge-feed", plunge_feed, 1.0e6),
-        ("--rpm", rpm, 1.0e6),
+        (
+            from(a.feed, "--feed", "the tool library's feed_mm_per_min"),
+            feed,
+            1.0e6,
+        ),
+        (
+            from(
+                a.plunge_feed,
+                "--plunge-feed",
+                "the tool library's plunge_feed_mm_per_min",
+            ),
+            plunge_feed,
+            1.0e6,
+        ),
+        (from(a.rpm, "--rpm", "the tool library's rpm"), rpm, 1.0e6),
         ("--rapid-rate", a.rapid_rate, 1.0e6),
     ] {
         if !(v.is_finite() && v > 0.0) {
