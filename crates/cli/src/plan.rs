@@ -403,14 +403,23 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let verification = if a.no_verify {
         None
     } else {
-        Some(crate::verify::run_verification(
-            &mesh,
-            &readback,
-            &cutter,
-            a.tolerance,
-            &a.verify,
-            a.json,
-        )?)
+        Some(
+            crate::verify::run_verification(
+                &mesh,
+                &readback,
+                &cutter,
+                a.tolerance,
+                &a.verify,
+                a.json,
+            )
+            .with_context(|| {
+                format!(
+                    "the program is written to {}, but verifying it could not run \
+                     (--no-verify skips it)",
+                    a.output.display()
+                )
+            })?,
+        )
     };
     let tp = &toolpath;
     let plunge_len = tp.length_where(|k| matches!(k, MoveKind::Plunge | MoveKind::Retract));
