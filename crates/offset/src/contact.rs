@@ -87,6 +87,22 @@ pub(crate) fn vertex(pf: &Profile, x: f64, y: f64, p: DVec3) -> Option<Hit> {
 /// (`n.z > 0`) through `v0`, if the tangency point lies inside the triangle `v`.
 #[inline]
 pub(crate) fn facet(pf: &Profile, x: f64, y: f64, v: &[DVec3; 3], n: DVec3) -> Option<Hit> {
+    let (z_tip, cc) = plane_contact(pf, x, y, v[0], n);
+    inside_xy(v, cc.x, cc.y).then_some((z_tip, cc))
+}
+
+/// Tool-tip z (mm) of the cutter at `(x, y)` tangent to the whole plane through `v0` with
+/// upward unit normal `n` (`n.z > 0`): an upper bound of its contact with any part of that
+/// plane (the tangency lies within the cutter's reach).
+#[inline]
+pub(crate) fn plane_tip(pf: &Profile, x: f64, y: f64, v0: DVec3, n: DVec3) -> f64 {
+    plane_contact(pf, x, y, v0, n).0
+}
+
+/// The cutter at `(x, y)` tangent to the plane through `v0` with upward unit normal `n`:
+/// tool-tip z and the tangency point (mm).
+#[inline]
+fn plane_contact(pf: &Profile, x: f64, y: f64, v0: DVec3, n: DVec3) -> Hit {
     let nxy = (n.x * n.x + n.y * n.y).sqrt();
     let (cx, cy) = if nxy <= 1e-15 {
         (x, y)
@@ -96,29 +112,8 @@ pub(crate) fn facet(pf: &Profile, x: f64, y: f64, v: &[DVec3; 3], n: DVec3) -> O
         let k = pf.a / nxy + pf.r;
         (x - k * n.x, y - k * n.y)
     };
-    if !inside_xy(v, cx, cy) {
-        return None;
-    }
-    let v0 = v[0];
     let zc = v0.z - (n.x * (cx - v0.x) + n.y * (cy - v0.y)) / n.z;
-    let z_tip = zc - pf.r + pf.r * n.z;
-    Some((z_tip, DVec3::new(cx, cy, zc)))
-}
-
-/// Tool-tip z (mm) of the cutter at `(x, y)` tangent to the whole plane through `v0` with
-/// upward unit normal `n` (`n.z > 0`): an upper bound of its contact with any part of that
-/// plane (the tangency lies within the cutter's reach).
-#[inline]
-pub(crate) fn plane_tip(pf: &Profile, x: f64, y: f64, v0: DVec3, n: DVec3) -> f64 {
-    let nxy = (n.x * n.x + n.y * n.y).sqrt();
-    let (cx, cy) = if nxy <= 1e-15 {
-        (x, y)
-    } else {
-        let k = pf.a / nxy + pf.r;
-        (x - k * n.x, y - k * n.y)
-    };
-    let zc = v0.z - (n.x * (cx - v0.x) + n.y * (cy - v0.y)) / n.z;
-    zc - pf.r + pf.r * n.z
+    (zc - pf.r + pf.r * n.z, DVec3::new(cx, cy, zc))
 }
 
 /// Point-in-triangle test in the XY projection, edges included.
