@@ -208,27 +208,19 @@ pub fn run(a: PlanArgs) -> Result<()> {
         ..PlanConfig::default()
     };
     cfg.validate()?;
-    // τ holds in the program as written: plan to τ less the post's rounding.
+    // τ holds in the program as written: plan to τ less the post's rounding. Nor can a
+    // scallop height below the rounding be held or checked (and the passes it asks for grow
+    // as 1/√h: 1e-9 mm would plan for days).
     let rounding = cam_gcode::rounding_mm(a.gcode_units);
-    if a.tolerance <= 2.0 * rounding {
-        anyhow::bail!(
-            "--tolerance {} mm is below what a program in {} can hold: its coordinates are \
-             rounded by up to {rounding:.1e} mm; use at least {:.4} mm",
-            a.tolerance,
-            a.gcode_units,
-            2.0 * rounding
-        );
-    }
-    // Likewise a scallop height below the rounding cannot be held (nor checked), and the
-    // passes it asks for grow as 1/√h: 1e-9 mm would plan for days.
-    if a.scallop <= 2.0 * rounding {
-        anyhow::bail!(
-            "--scallop {} mm is below what a program in {} can hold: its coordinates are \
-             rounded by up to {rounding:.1e} mm; use at least {:.4} mm",
-            a.scallop,
-            a.gcode_units,
-            2.0 * rounding
-        );
+    for (flag, v) in [("--tolerance", a.tolerance), ("--scallop", a.scallop)] {
+        if v <= 2.0 * rounding {
+            anyhow::bail!(
+                "{flag} {v} mm is below what a program in {} can hold: its coordinates are \
+                 rounded by up to {rounding:.1e} mm; use at least {:.4} mm",
+                a.gcode_units,
+                2.0 * rounding
+            );
+        }
     }
     if !a.no_verify && a.tolerance > cam_verify::pipeline::MAX_TOLERANCE_MM {
         anyhow::bail!(
