@@ -10,7 +10,7 @@
 //! move (`u` in `[0, 1]`, tip and axis interpolated as in [`crate::sweep`]), which is what
 //! the exact refinement of [`crate::exact`] works with.
 
-use cam_core::{Cutter, DVec3, MoveKind, Pose, Toolpath, Triangle};
+use cam_core::{Cutter, DVec3, Move, MoveKind, Pose, Toolpath, Triangle};
 use rayon::prelude::*;
 
 use crate::imprint::{
@@ -129,37 +129,45 @@ fn move_length(a: &Pose, b: &Pose, cutter: &Cutter) -> f64 {
     a.tip.distance(b.tip) + a.axis.distance(b.axis) * cutter.radius()
 }
 
-/// How many poses [`SweepModel::new`] sweeps along `path` (each feed move subdivided as it
-/// does), computed without building them: callers bound the model's memory with it.
-pub fn pose_count(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> f64 {
-    let max_step = if cfg.max_step_mm.is_finite() && cfg.max_step_mm > 0.0 {
+/// The longest step (mm) between swept poses: `cfg.max_step_mm`, or unlimited when it is
+/// not a positive number.
+fn max_step(cfg: &SweepConfig) -> f64 {
+    if cfg.max_step_mm.is_finite() && cfg.max_step_mm > 0.0 {
         cfg.max_step_mm
     } else {
         f64::INFINITY
-    };
+    }
+}
+
+/// The steps a move of `len` mm is swept in: at most `max_step` mm each, 1 to 1e6.
+fn subdivisions(len: f64, max_step: f64) -> usize {
+    if len.is_finite() && max_step.is_finite() {
+        ((len / max_step).ceil() as usize).clamp(1, 1_000_000)
+    } else {
+        1
+    }
+}
+
+/// Whether the sweep skips the move from `a` to `b` (a rapid, or a translation when only
+/// rotating moves are swept).
+fn skipped(a: &Move, b: &Move, cfg: &SweepConfig) -> bool {
+    b.kind == MoveKind::Rapid || (cfg.rotating_only && a.pose.axis == b.pose.axis)
+}
+
+/// How many poses [`SweepModel::new`] sweeps along `path` (each feed move subdivided as it
+/// does), computed without building them: callers bound the model's memory with it.
+pub fn pose_count(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> f64 {
+    let step = max_step(cfg);
     path.moves
         .windows(2)
-        .filter(|w| {
-            w[1].kind != MoveKind::Rapid && !(cfg.rotating_only && w[0].pose.axis == w[1].pose.axis)
-        })
-        .map(|w| {
-            let len = move_length(&w[0].pose, &w[1].pose, cutter);
-            if len.is_finite() && max_step.is_finite() {
-                (len / max_step).ceil().clamp(1.0, 1.0e6)
-            } else {
-                1.0
-            }
-        })
+        .filter(|w| !skipped(&w[0], &w[1], cfg))
+        .map(|w| subdivisions(move_length(&w[0].pose, &w[1].pose, cutter), step) as f64)
         .sum()
 }
 
 /// The stretches of consecutive feed moves, subdivided.
 fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch> {
-    let max_step = if cfg.max_step_mm.is_finite() && cfg.max_step_mm > 0.0 {
-        cfg.max_step_mm
-    } else {
-        f64::INFINITY
-    };
+    let max_step = max_step(cfg);
     let mut out = Vec::new();
     let mut cur = Stretch::default();
     // The move and parameter of the last pose kept in `cur`.
@@ -167,7 +175,7 @@ fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch
     for (i, w) in path.moves.windows(2).enumerate() {
         let idx = (i + 1) as u32;
         let (a, b) = (&w[0].pose, &w[1].pose);
-        if w[1].kind == MoveKind::Rapid || (cfg.rotating_only && a.axis == b.axis) {
+        if skipped(&w[0], &w[1], cfg) {
             if cur.poses.len() >= 2 {
                 out.push(std::mem::take(&mut cur));
             }
@@ -175,12 +183,7 @@ fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch
             last_param = None;
             continue;
         }
-        let len = move_length(a, b, cutter);
-        let n = if len.is_finite() && max_step.is_finite() {
-            ((len / max_step).ceil() as usize).clamp(1, 1_000_000)
-        } else {
-            1
-        };
+        let n = subdivisions(move_length(a, b, cutter), max_step);
         if cur.poses.is_empty() {
             cur.poses.push(*a);
         }
