@@ -163,6 +163,8 @@ fn plan_bad_values_exit_2() {
         a.extend(["-o", out.to_str().unwrap()]);
         let o = cam(&a);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        // A user error, named as such (safe Z 1e300 used to surface as an internal error).
+        assert!(!stderr(&o).contains("internal"), "{args:?}: {}", stderr(&o));
         assert!(!out.exists());
     }
     let bad = write(
