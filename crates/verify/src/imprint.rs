@@ -68,7 +68,9 @@
 //!   surface there and caps it.
 //! - Motion along the axis (`h = 0`): no demarcation exists; the half centred on `e1` is
 //!   emitted (every insert's imprint is its side point) and [`CurveStatus::Axial`] is returned.
-//!   The other half of a plunge's wall is not emitted (the caps close the bottom).
+//!   The other half of a plunge's wall is not emitted (the caps close the bottom); the sweep
+//!   marks such steps for the exact measurement, which searches their move directly, both
+//!   halves (the linear surface and the exported sweep hold the emitted half only).
 //! - Flat end mill (`r = 0`): every imprint point is the rim point `T_q`; the flat bottom is
 //!   the ruled surface between rim half-circles of neighbouring poses (see `sweep`).
 //!

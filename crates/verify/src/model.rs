@@ -47,9 +47,10 @@ pub enum Piece {
         /// The move the cap is attributed to.
         mv: u32,
     },
-    /// A step with no strip because the imprinted half flips between its poses (caps at both
-    /// poses stand for it on the imprint surface). No triangles; the exact measurement
-    /// searches the step's move directly.
+    /// A step the exact measurement searches directly (its move's exact volume), with no
+    /// triangles: a step with no strip because the imprinted half flips between its poses
+    /// (caps at both poses stand for it on the imprint surface), or a step along the tool
+    /// axis, whose strip holds one half of the wall it sweeps.
     Gap {
         /// Index of the step's first pose in [`SweepModel::frames`].
         frame: u32,
@@ -223,6 +224,14 @@ fn stretches(path: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> Vec<Stretch
     out
 }
 
+/// Whether the step between two pose frames moves along the (unchanged) tool axis: its
+/// centre's motion has no part across the axis beyond rounding.
+fn axial_step(a: &PoseFrame, b: &PoseFrame) -> bool {
+    let d = b.centre - a.centre;
+    let h = d - d.dot(a.axis) * a.axis;
+    a.axis == b.axis && d != DVec3::ZERO && h.length() <= 1e-9 * d.length()
+}
+
 /// Pose indices where a stretch breaks (first and last included).
 fn breaks(frames: &[PoseFrame], sharp_turn_deg: f64) -> Vec<usize> {
     let cos_limit = sharp_turn_deg.to_radians().cos();
@@ -343,6 +352,15 @@ impl SweepModel {
                     frame: base + p as u32,
                     step: seg.steps[p],
                 });
+                if axial_step(&seg.frames[p], &seg.frames[p + 1]) {
+                    // Motion along the axis (a plunge or a retract): no demarcation picks a
+                    // half, the strip holds one half of the wall, so the exact measurement
+                    // also searches the step's move directly, both halves.
+                    pieces.push(Piece::Gap {
+                        frame: base + p as u32,
+                        step: seg.steps[p],
+                    });
+                }
             }
             pieces.push(Piece::Cap {
                 frame: base + n as u32 - 1,

@@ -154,3 +154,64 @@ fn surface_flag_selects_linear_or_exact() {
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
 }
+
+/// An axis-aligned box `[x0, x1] × [0, 10] × [0, 5]` as OBJ, faces outward.
+fn box_obj(x0: f64, x1: f64) -> String {
+    let mut s = String::new();
+    for x in [x0, x1] {
+        for y in [0.0, 10.0] {
+            for z in [0.0, 5.0] {
+                s += &format!("v {x} {y} {z}\n");
+            }
+        }
+    }
+    let i = |a: usize, b: usize, c: usize| a * 4 + b * 2 + c + 1;
+    let quads = [
+        [(0, 0, 0), (0, 1, 0), (1, 1, 0), (1, 0, 0)],
+        [(0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)],
+        [(0, 0, 0), (0, 0, 1), (0, 1, 1), (0, 1, 0)],
+        [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1)],
+        [(0, 0, 0), (1, 0, 0), (1, 0, 1), (0, 0, 1)],
+        [(0, 1, 0), (0, 1, 1), (1, 1, 1), (1, 1, 0)],
+    ];
+    for q in quads {
+        let [a, b, c, d] = q.map(|(x, y, z)| i(x, y, z));
+        s += &format!("f {a} {b} {c}\nf {a} {c} {d}\n");
+    }
+    s
+}
+
+/// A plunge whose side cuts 0.2 mm into a wall is a gouge whichever side the wall is on: a
+/// move along the tool axis has no front half, both halves of its wall cut. (The verifier
+/// used to model one half only, and passed this program on one side with no finding.)
+#[test]
+fn plunge_into_a_wall_is_a_gouge_on_either_side() {
+    let d = tempfile::tempdir().unwrap();
+    for (name, x0, x1, tool_x) in [("right", 0.0, 10.0, -2.8), ("left", -10.0, 0.0, 2.8)] {
+        let part = write(d.path(), &format!("{name}.obj"), &box_obj(x0, x1));
+        let ngc = write(
+            d.path(),
+            &format!("{name}.ngc"),
+            &format!("G21 G90 G17\nG0 Z10\nG0 X{tool_x} Y5\nG0 Z3.5\nG1 Z2 F100\nG0 Z10\nM30\n"),
+        );
+        let o = cam(&[
+            "verify",
+            ngc.to_str().unwrap(),
+            "--part",
+            part.to_str().unwrap(),
+            "--tool",
+            "flat:6",
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let g = j["max_gouge_mm"].as_f64().unwrap();
+        assert!((g - 0.2).abs() < 1e-9, "{name}: max gouge {g}");
+        let w = &j["worst_gouges"][0];
+        assert_eq!(w["line"], 5, "{name}: the plunge's line: {w}");
+        assert!(
+            w["position"][0].as_f64().unwrap().abs() < 1e-9,
+            "{name}: on the wall: {w}"
+        );
+    }
+}

@@ -226,3 +226,48 @@ fn exact_surface_equals_zmap_on_vertical_lines() {
         }
     }
 }
+
+/// A plunge and a retract move along the tool axis: no demarcation picks a half of the wall
+/// they sweep, and both halves are real (nothing above or beside the tool covers either), so
+/// a line coming at the wall from any side enters it where the cylinder of radius R is.
+#[test]
+fn plunge_walls_are_entered_from_every_side() {
+    use cam_verify::measure::first_entries;
+    let mv = |kind, z: f64| Move {
+        kind,
+        pose: Pose::vertical(DVec3::new(0.0, 0.0, z)),
+        feed_mm_per_min: Some(500.0),
+        line: None,
+        pass: None,
+    };
+    let tp = Toolpath {
+        moves: vec![
+            mv(MoveKind::Rapid, 10.0),
+            mv(MoveKind::Plunge, 0.0),
+            mv(MoveKind::Retract, 10.0),
+        ],
+    };
+    for spec in ["flat:6", "bull:6:1.5", "ball:6"] {
+        let cutter: Cutter = spec.parse().unwrap();
+        let model = SweepModel::new(&tp, &cutter, &SweepConfig::default());
+        // Horizontal lines towards the axis from 4 mm out, at heights where the swept wall
+        // is the cylinder of radius 3 for every cutter, from 16 directions.
+        let mut lines = Vec::new();
+        for k in 0..16 {
+            let a = k as f64 * std::f64::consts::TAU / 16.0 + 0.1;
+            let d = DVec3::new(a.cos(), a.sin(), 0.0);
+            for z in [4.0, 6.0, 8.0] {
+                lines.push((4.0 * d + DVec3::new(0.0, 0.0, z), -d));
+            }
+        }
+        let got = first_entries(&[&model], &tp, &lines, 3.0, SurfaceModel::Exact);
+        for (l, s) in lines.iter().zip(&got) {
+            let s = s.unwrap_or_else(|| panic!("{spec}: line from {:?} enters nothing", l.0));
+            assert!(
+                (s - 1.0).abs() <= 1e-9,
+                "{spec}: line from {:?} enters at {s}",
+                l.0
+            );
+        }
+    }
+}
