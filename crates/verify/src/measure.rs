@@ -391,50 +391,79 @@ impl Refiner<'_> {
 
 /// The pieces searched exactly in [`SurfaceModel::Exact`] rather than located by triangles:
 /// caps (the tool at one pose) and gaps (a step whose strip is missing because the imprinted
-/// half flips). A hierarchy of bounds: the sphere of radius `R` about a cap's torus centre
-/// holds its whole puck; the capsule of radius `R` about a gap's centre segment holds its
-/// step's swept volume.
+/// half flips, or a step along the axis). Each item has two bounds, and a hierarchy of boxes
+/// over the first:
+/// * a box: for a cap, or a gap whose axis does not turn, the box of its puck at its
+///   pose(s), exact for a torus of major radius `a` and tube `r` about the unit axis `k`
+///   (half-extent `a·√(1 − k_i²) + r` along axis `i`; a translation's swept volume lies in
+///   the box of its two ends' pucks); for a gap whose axis turns, the capsule's box;
+/// * the capsule of radius `R` about its centre segment (a cap's sphere).
+///
+/// The box is much tighter than the capsule along a vertical axis (a flat end mill's disk
+/// is `2R` wide but has no height), which is what most lines cross on a 3-axis path; the
+/// capsule is exact for a ball.
 struct Extras {
     /// `(model, piece, centre at the first pose, centre at the second)`, in tree order.
     items: Vec<(u8, u32, DVec3, DVec3)>,
+    /// Per item: its box (mm).
+    bounds: Vec<(DVec3, DVec3)>,
     /// Nodes: box and, for a leaf, the item range; inner nodes point at two children.
     nodes: Vec<(DVec3, DVec3, u32, u32)>,
     radius: f64,
 }
 
+/// Half-extents (mm) of a torus puck (major radius `a`, tube `r`) about the unit axis `k`,
+/// padded for rounding.
+fn puck_extent(a: f64, r: f64, k: DVec3, pad: f64) -> DVec3 {
+    let e = |ki: f64| a * (1.0 - ki * ki).max(0.0).sqrt() + r + pad;
+    DVec3::new(e(k.x), e(k.y), e(k.z))
+}
+
 impl Extras {
     fn new(models: &[&SweepModel]) -> Extras {
+        // A step rotating the axis moves its centre along a slightly curved path: pad.
+        let radius = models
+            .first()
+            .map_or(0.0, |m| m.cutter().radius() * (1.0 + 1e-9) + 1e-9);
         let mut items = Vec::new();
+        let mut bounds = Vec::new();
         for (mi, m) in models.iter().enumerate() {
+            let puck = Puck::of(m.cutter());
+            let pad = 1e-9 * (1.0 + puck.a + puck.r);
             for (pi, p) in m.pieces.iter().enumerate() {
                 match *p {
                     Piece::Cap { frame, .. } => {
-                        let c = m.frames[frame as usize].centre;
-                        items.push((mi as u8, pi as u32, c, c));
+                        let f = &m.frames[frame as usize];
+                        let e = puck_extent(puck.a, puck.r, f.axis, pad);
+                        items.push((mi as u8, pi as u32, f.centre, f.centre));
+                        bounds.push((f.centre - e, f.centre + e));
                     }
                     Piece::Gap { frame, .. } => {
-                        let (a, b) = (
-                            m.frames[frame as usize].centre,
-                            m.frames[frame as usize + 1].centre,
-                        );
+                        let (f0, f1) = (&m.frames[frame as usize], &m.frames[frame as usize + 1]);
+                        let (a, b) = (f0.centre, f1.centre);
                         items.push((mi as u8, pi as u32, a, b));
+                        if f0.axis == f1.axis {
+                            let e = puck_extent(puck.a, puck.r, f0.axis, pad);
+                            bounds.push((a.min(b) - e, a.max(b) + e));
+                        } else {
+                            let r = DVec3::splat(radius);
+                            bounds.push((a.min(b) - r, a.max(b) + r));
+                        }
                     }
                     Piece::Strip { .. } => {}
                 }
             }
         }
-        // A step rotating the axis moves its centre along a slightly curved path: pad.
-        let radius = models
-            .first()
-            .map_or(0.0, |m| m.cutter().radius() * (1.0 + 1e-9) + 1e-9);
         let mids: Vec<DVec3> = items.iter().map(|c| 0.5 * (c.2 + c.3)).collect();
         let codes = crate::locate::morton_codes(&mids);
         let mut order: Vec<(u64, usize)> =
             codes.into_iter().enumerate().map(|(i, c)| (c, i)).collect();
         order.sort_unstable();
+        let bounds: Vec<_> = order.iter().map(|&(_, i)| bounds[i]).collect();
         let items: Vec<_> = order.iter().map(|&(_, i)| items[i]).collect();
         let mut e = Extras {
             items,
+            bounds,
             nodes: Vec::new(),
             radius,
         };
@@ -446,12 +475,11 @@ impl Extras {
     }
 
     fn build(&mut self, ni: usize, lo: usize, hi: usize) {
-        let r = DVec3::splat(self.radius);
         if hi - lo <= 2 {
             let (mut a, mut b) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-            for c in &self.items[lo..hi] {
-                a = a.min(c.2.min(c.3) - r);
-                b = b.max(c.2.max(c.3) + r);
+            for c in &self.bounds[lo..hi] {
+                a = a.min(c.0);
+                b = b.max(c.1);
             }
             self.nodes[ni] = (a, b, lo as u32, (hi - lo) as u32);
             return;
@@ -486,6 +514,12 @@ impl Extras {
             }
             for ci in first as usize..(first + count) as usize {
                 let (_, _, c0, c1) = self.items[ci];
+                let (bl, bh) = self.bounds[ci];
+                // Both bounds hold: the box (tight along a vertical axis), then the capsule
+                // (tight for a ball).
+                if count > 1 && !segment_box(line.o, inv, bl, bh, line.lo, hi) {
+                    continue;
+                }
                 let seg = Line { hi, ..*line };
                 if crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none() {
                     continue;
