@@ -8,6 +8,10 @@
 //! surface (flat bottom and corner torus); above it the puck lies inside the real cutter
 //! (whose cylinder continues upward), so an entry into the puck is an entry into the cutter.
 //! A ball is the sphere of radius `r` about `c`; a flat end mill (`r = 0`) is the disk itself.
+//! Above the puck the cutter continues as its *column* ([`crate::column`]: the cylinder of
+//! radius `a + r` from the centre plane up, unbounded); the measurement tests it for vectors
+//! that start inside the cutter ([`MoveGeometry::cutter_holds`]), which the imprint surface
+//! of the corner cannot show.
 //!
 //! # Motion model
 //! As in [`crate::sweep`]: along move `A → B` the tip moves linearly and the axis is
@@ -695,6 +699,77 @@ impl MoveGeometry {
         let (c0, k) = self.centre_axis(0.0);
         let (c1, _) = self.centre_axis(1.0);
         translation_entry(line, &self.puck, c0, c1, k)
+    }
+
+    /// Whether `p` lies in the cutter somewhere along the move: in its puck
+    /// ([`MoveGeometry::depth_at`] above 0) or its column ([`MoveGeometry::column_holds`]).
+    pub fn cutter_holds(&self, p: DVec3) -> bool {
+        if self.puck.r == 0.0 {
+            // A flat end mill's puck is its disk, which holds nothing the column does not.
+            return self.column_holds(p);
+        }
+        if self.puck.a == 0.0 && self.is_translation() {
+            // A ball's swept puck is the capsule about the centre's segment.
+            let (c0, _) = self.centre_axis(0.0);
+            let (c1, _) = self.centre_axis(1.0);
+            let d = c1 - c0;
+            let t = if d.length_squared() > 0.0 {
+                ((p - c0).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            return p.distance(c0 + t * d) < self.puck.r || self.column_holds(p);
+        }
+        if self.column_holds(p) {
+            return true;
+        }
+        if self.is_translation() {
+            // Outside the capsule of radius a + r about the centre's segment, or below the
+            // lower centre plane by more than r: not in the swept puck.
+            let (c0, k) = self.centre_axis(0.0);
+            let (c1, _) = self.centre_axis(1.0);
+            let d = c1 - c0;
+            let t = if d.length_squared() > 0.0 {
+                ((p - c0).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let below = (p - c0).dot(k) - d.dot(k).min(0.0);
+            if p.distance(c0 + t * d) >= self.puck.a + self.puck.r || below <= -self.puck.r {
+                return false;
+            }
+        }
+        self.depth_at(p) > 0.0
+    }
+
+    /// Whether `p` lies in the cutter's column ([`crate::column`]: the cylinder of radius
+    /// `a + r` above the torus centre plane) somewhere along the move: exact for a
+    /// translation; for a rotating move, at its two poses.
+    pub fn column_holds(&self, p: DVec3) -> bool {
+        let rr = self.puck.a + self.puck.r;
+        if self.is_translation() {
+            // Below the lower base plane: not in any column.
+            let (c0, k) = self.centre_axis(0.0);
+            let (c1, _) = self.centre_axis(1.0);
+            if (p - c0).dot(k) < (c1 - c0).dot(k).min(0.0) - 1e-9 * (1.0 + rr) {
+                return false;
+            }
+        }
+        let at = Line {
+            o: p,
+            n: DVec3::Z,
+            lo: 0.0,
+            hi: 0.0,
+        };
+        if self.is_translation() {
+            let (c0, k) = self.centre_axis(0.0);
+            let (c1, _) = self.centre_axis(1.0);
+            return crate::column::column_translation_entry(&at, c0, c1, k, rr).is_some();
+        }
+        [0.0, 1.0].into_iter().any(|u| {
+            let (c, k) = self.centre_axis(u);
+            crate::column::column_entry(&at, c, k, rr).is_some()
+        })
     }
 }
 

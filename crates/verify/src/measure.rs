@@ -389,21 +389,23 @@ impl Refiner<'_> {
     }
 }
 
-/// The pieces searched exactly in [`SurfaceModel::Exact`] rather than located by triangles:
-/// caps (the tool at one pose) and gaps (a step whose strip is missing because the imprinted
-/// half flips, or a step along the axis). Each item has two bounds, and a hierarchy of boxes
-/// over the first:
-/// * a box: for a cap, or a gap whose axis does not turn, the box of its puck at its
-///   pose(s), exact for a torus of major radius `a` and tube `r` about the unit axis `k`
-///   (half-extent `a·√(1 − k_i²) + r` along axis `i`; a translation's swept volume lies in
-///   the box of its two ends' pucks); for a gap whose axis turns, the capsule's box;
-/// * the capsule of radius `R` about its centre segment (a cap's sphere).
-///
-/// The box is much tighter than the capsule along a vertical axis (a flat end mill's disk
-/// is `2R` wide but has no height), which is what most lines cross on a 3-axis path; the
-/// capsule is exact for a ball.
+/// What the exact measurement searches directly rather than locating by triangles, in a
+/// hierarchy of boxes. Two sets:
+/// * caps (the tool at one pose) and gaps (a step whose strip is missing because the
+///   imprinted half flips, or a step along the axis). Box: for a cap, or a gap whose axis
+///   does not turn, the box of its puck at its pose(s), exact for a torus of major radius
+///   `a` and tube `r` about the unit axis `k` (half-extent `a·√(1 − k_i²) + r` along axis
+///   `i`; a translation's swept volume lies in the box of its two ends' pucks); for a gap
+///   whose axis turns, the capsule's box. Each is also bounded by the capsule of radius `R`
+///   about its centre segment (a cap's sphere), exact for a ball; the box is much tighter
+///   along a vertical axis (a flat end mill's disk is `2R` wide but has no height);
+/// * every feed move's whole cutter, puck and column ([`crate::column`]), for the vectors
+///   that start inside it: the box of the radius-`R` disks at its two ends' centres grown by
+///   `r` (the puck below), unbounded along every coordinate the axis climbs in (both ways
+///   where the axis turns through it).
 struct Extras {
-    /// `(model, piece, centre at the first pose, centre at the second)`, in tree order.
+    /// `(model, piece, centre at the first pose, centre at the second)`, in tree order; a
+    /// column is `(COLUMN, move, …)`.
     items: Vec<(u8, u32, DVec3, DVec3)>,
     /// Per item: its box (mm).
     bounds: Vec<(DVec3, DVec3)>,
@@ -411,6 +413,9 @@ struct Extras {
     nodes: Vec<(DVec3, DVec3, u32, u32)>,
     radius: f64,
 }
+
+/// The model index that marks a column in [`Extras::items`].
+const COLUMN: u8 = u8::MAX;
 
 /// Half-extents (mm) of a torus puck (major radius `a`, tube `r`) about the unit axis `k`,
 /// padded for rounding.
@@ -454,6 +459,55 @@ impl Extras {
                 }
             }
         }
+        Extras::from_items(items, bounds, radius)
+    }
+
+    /// The columns of every feed move of `toolpath` for the cutter of `models` (the same for
+    /// both sweeps: once).
+    fn columns(models: &[&SweepModel], toolpath: &Toolpath) -> Extras {
+        let (mut items, mut bounds) = (Vec::new(), Vec::new());
+        if let Some(m) = models.first() {
+            let puck = Puck::of(m.cutter());
+            let rr = puck.a + puck.r;
+            let pad = 1e-9 * (1.0 + rr);
+            for (i, w) in toolpath.moves.windows(2).enumerate() {
+                let (a, b) = (w[0].pose, w[1].pose);
+                if w[1].kind == cam_core::MoveKind::Rapid || (a.tip == b.tip && a.axis == b.axis) {
+                    continue;
+                }
+                let (c0, c1) = (a.tip + puck.r * a.axis, b.tip + puck.r * b.axis);
+                // The column and the puck below it (down to the tip).
+                let (mut lo, mut hi) = if a.axis == b.axis {
+                    let e = puck_extent(puck.a, puck.r, a.axis, pad)
+                        .max(puck_extent(rr, 0.0, a.axis, pad));
+                    (c0.min(c1) - e, c0.max(c1) + e)
+                } else {
+                    // The centre runs on a slightly curved path: grow by the tube too.
+                    let e = DVec3::splat(rr + puck.r + pad);
+                    (c0.min(c1) - e, c0.max(c1) + e)
+                };
+                for k in [a.axis, b.axis] {
+                    for j in 0..3 {
+                        if k[j] > 1e-12 {
+                            hi[j] = f64::INFINITY;
+                        } else if k[j] < -1e-12 {
+                            lo[j] = f64::NEG_INFINITY;
+                        }
+                    }
+                }
+                items.push((COLUMN, (i + 1) as u32, c0, c1));
+                bounds.push((lo, hi));
+            }
+        }
+        Extras::from_items(items, bounds, 0.0)
+    }
+
+    /// The hierarchy over `items` with their boxes.
+    fn from_items(
+        items: Vec<(u8, u32, DVec3, DVec3)>,
+        bounds: Vec<(DVec3, DVec3)>,
+        radius: f64,
+    ) -> Extras {
         let mids: Vec<DVec3> = items.iter().map(|c| 0.5 * (c.2 + c.3)).collect();
         let codes = crate::locate::morton_codes(&mids);
         let mut order: Vec<(u64, usize)> =
@@ -513,15 +567,17 @@ impl Extras {
                 continue;
             }
             for ci in first as usize..(first + count) as usize {
-                let (_, _, c0, c1) = self.items[ci];
+                let (model, _, c0, c1) = self.items[ci];
                 let (bl, bh) = self.bounds[ci];
                 // Both bounds hold: the box (tight along a vertical axis), then the capsule
-                // (tight for a ball).
+                // (tight for a ball; a column has its box only).
                 if count > 1 && !segment_box(line.o, inv, bl, bh, line.lo, hi) {
                     continue;
                 }
                 let seg = Line { hi, ..*line };
-                if crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none() {
+                if model != COLUMN
+                    && crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none()
+                {
                     continue;
                 }
                 hi = f(ci, hi);
@@ -751,6 +807,7 @@ fn measure_vectors(
         puck,
     };
     let extras = exact.then(|| Extras::new(models));
+    let columns = exact.then(|| Extras::columns(models, toolpath));
     let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
     let move_of = |c: &Crossing| {
         let (piece, _) = unkey(c.key);
@@ -882,8 +939,8 @@ fn measure_vectors(
             let hi = best.map_or(v.hi, |b| b.0.s);
             extras.visit(&line, hi, |ci, hi| {
                 let (mi, pi, c, _) = extras.items[ci];
-                let model = models[mi as usize];
                 let seg = Line { hi, ..line };
+                let model = models[mi as usize];
                 match model.pieces[pi as usize] {
                     Piece::Cap { frame, mv } => {
                         let k = model.frames[frame as usize].axis;
@@ -940,6 +997,36 @@ fn measure_vectors(
                     Piece::Strip { .. } => {}
                 }
                 best.map_or(hi, |b| b.0.s.min(hi))
+            });
+        }
+        // A gouge deeper than the vector reaches into the part: the vector starts inside the
+        // cutter and may cross none of the imprint surface's triangles (the corner is all
+        // they hold). The moves whose cutter holds the vertex are found by its point, and
+        // where one holds the start too, the vertex is gouged at least as deep as the
+        // vector reaches.
+        if let Some(columns) = &columns
+            && best.is_none_or(|b| b.0.s > v.lo)
+        {
+            let start = line.o + line.lo * line.n;
+            let vertex = Line {
+                lo: 0.0,
+                hi: 0.0,
+                ..line
+            };
+            columns.visit(&vertex, 0.0, |ci, hi| {
+                let mv = columns.items[ci].1;
+                if let Some(g) = rf.feed_geometry(mv)
+                    && g.cutter_holds(line.o)
+                    && g.cutter_holds(start)
+                {
+                    stats[1] += 1;
+                    let e = Entry {
+                        s: line.lo,
+                        normal: -line.n,
+                    };
+                    better(e, mv, (COLUMN, mv as u64), Source::Move(mv), &mut best);
+                }
+                hi
             });
         }
         match (best, linear) {

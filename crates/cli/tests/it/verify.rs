@@ -183,7 +183,9 @@ fn box_obj(x0: f64, x1: f64) -> String {
 
 /// A plunge whose side cuts 0.2 mm into a wall is a gouge whichever side the wall is on: a
 /// move along the tool axis has no front half, both halves of its wall cut. (The verifier
-/// used to model one half only, and passed this program on one side with no finding.)
+/// used to model one half only, and passed this program on one side with no finding.) The
+/// cutter above its corner also cuts the wall's top edge, from the plunge's bottom up
+/// through the top face: gouged deeper than the vectors reach (1 mm).
 #[test]
 fn plunge_into_a_wall_is_a_gouge_on_either_side() {
     let d = tempfile::tempdir().unwrap();
@@ -206,12 +208,55 @@ fn plunge_into_a_wall_is_a_gouge_on_either_side() {
         assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         let g = j["max_gouge_mm"].as_f64().unwrap();
-        assert!((g - 0.2).abs() < 1e-9, "{name}: max gouge {g}");
-        let w = &j["worst_gouges"][0];
-        assert_eq!(w["line"], 5, "{name}: the plunge's line: {w}");
+        assert!((g - 1.0).abs() < 1e-9, "{name}: max gouge {g}");
+        let worst = j["worst_gouges"].as_array().unwrap();
         assert!(
-            w["position"][0].as_f64().unwrap().abs() < 1e-9,
-            "{name}: on the wall: {w}"
+            worst.iter().all(|w| w["line"] == 5),
+            "{name}: the plunge's line"
         );
+        // The wall itself, below the top face: 0.2 mm along its normal.
+        let wall = worst
+            .iter()
+            .find(|w| w["position"][0].as_f64().unwrap().abs() < 1e-9)
+            .unwrap_or_else(|| panic!("{name}: no gouge on the wall: {worst:?}"));
+        let s = wall["signed_mm"].as_f64().unwrap();
+        assert!((s + 0.2).abs() < 1e-9, "{name}: wall gouge {s}");
+    }
+}
+
+/// A flat end mill run 2 mm deep across a box: its flat bottom is 1 mm below where the
+/// vectors from the top face start, so only the cutter above its corner meets them. (The
+/// verifier modelled the corner alone and passed this slot with no gouge and exit 0.)
+#[test]
+fn slot_deeper_than_the_vectors_reach_is_a_gouge() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "box.obj", &box_obj(0.0, 10.0));
+    let ngc = write(
+        d.path(),
+        "slot.ngc",
+        "G21 G90 G17\nG0 Z10\nG0 X-5 Y5\nG1 Z3 F100\nG1 X15 F500\nG0 Z10\nM30\n",
+    );
+    for tool in ["flat:6", "bull:6:1.5", "ball:6"] {
+        let o = cam(&[
+            "verify",
+            ngc.to_str().unwrap(),
+            "--part",
+            part.to_str().unwrap(),
+            "--tool",
+            tool,
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let g = j["max_gouge_mm"].as_f64().unwrap();
+        assert!(g >= 1.0 - 1e-9, "{tool}: max gouge {g}");
+        // The top face over the slot, 6 mm wide: every measured vertex there is gouged.
+        let top = j["worst_gouges"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|w| (w["position"][2].as_f64().unwrap() - 5.0).abs() < 1e-9)
+            .count();
+        assert!(top > 0, "{tool}: no gouge on the top face: {j}");
     }
 }

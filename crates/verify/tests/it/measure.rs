@@ -271,3 +271,147 @@ fn plunge_walls_are_entered_from_every_side() {
         }
     }
 }
+
+/// A gouging 3-axis program over the dome with everything a real one has: passes both ways
+/// 0.05 mm below a ball's drop surface (so every cutter cuts into the part), each entered by
+/// a plunge from above and left by a retract, the passes joined by rapids.
+fn dome_program_with_plunges() -> Toolpath {
+    let mv = |kind, x: f64, y: f64, z: f64| Move {
+        kind,
+        pose: Pose::vertical(DVec3::new(x, y, z)),
+        feed_mm_per_min: Some(1000.0),
+        line: None,
+        pass: None,
+    };
+    let mut moves = vec![mv(MoveKind::Rapid, -12.0, -6.0, 30.0)];
+    for (j, y) in [-6.0, -4.5, -3.0, -1.5, 0.0, 1.5, 3.0]
+        .into_iter()
+        .enumerate()
+    {
+        let xs: Vec<f64> = (0..=48).map(|i| -12.0 + 0.5 * i as f64).collect();
+        let xs: Vec<f64> = if j % 2 == 0 {
+            xs
+        } else {
+            xs.into_iter().rev().collect()
+        };
+        let z = |x: f64| ball_tip_on_dome(x, y, 3.0) - 0.05;
+        moves.push(mv(MoveKind::Rapid, xs[0], y, 30.0));
+        moves.push(mv(MoveKind::Plunge, xs[0], y, z(xs[0])));
+        for &x in &xs[1..] {
+            moves.push(mv(MoveKind::Cut, x, y, z(x)));
+        }
+        let last = *xs.last().unwrap();
+        moves.push(mv(MoveKind::Retract, last, y, 30.0));
+    }
+    Toolpath { moves }
+}
+
+/// The exact measurement against brute force: the first entry of each line into the exact
+/// volume of every feed move of the program, tested one by one (a line starting inside a
+/// move's column, the cutter above its corner, is entered at its start). Along the dome's
+/// normals, from 1 mm inside to 3 mm outside, for a ball, a bull and a flat end mill:
+/// * no reading is below the brute force (every entry the measurement reports is real);
+/// * every gouge (brute-force entry inside the part) is read exactly, those deeper than the
+///   line reaches included;
+/// * material left is read exactly except where the nearest part of the tool is the part of
+///   a puck's swept volume that the column above it covers (the sweep imprints the corner
+///   torus and leaves that part to the column, which is searched for starts only): those
+///   readings are higher, and few.
+#[test]
+fn exact_entries_equal_brute_force_over_every_move() {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    use cam_verify::measure::first_entries;
+    let tp = dome_program_with_plunges();
+    // Normals of the hemisphere (radius 20 about the origin) and of the plate around it.
+    let mut lines = Vec::new();
+    for i in 0..60 {
+        for j in 0..30 {
+            let (x, y) = (
+                -11.0 + 22.0 * i as f64 / 59.0,
+                -7.0 + 11.0 * j as f64 / 29.0,
+            );
+            let d2 = x * x + y * y;
+            let (p, n) = if d2 < 400.0 {
+                let p = DVec3::new(x, y, (400.0 - d2).sqrt());
+                (p, p / 20.0)
+            } else {
+                (DVec3::new(x, y, 0.0), DVec3::Z)
+            };
+            lines.push((p - 1.0 * n, n));
+        }
+    }
+    for spec in ["ball:6", "bull:6:1.5", "flat:6"] {
+        let cutter: Cutter = spec.parse().unwrap();
+        let model = SweepModel::new(&tp, &cutter, &SweepConfig::default());
+        let got = first_entries(&[&model], &tp, &lines, 4.0, SurfaceModel::Exact);
+        let puck = Puck::of(&cutter);
+        let (mut gouges, mut higher, mut worst, mut columns) = (0, 0, 0.0f64, 0);
+        for (&(o, n), got) in lines.iter().zip(&got) {
+            let line = Line {
+                o,
+                n,
+                lo: 0.0,
+                hi: 4.0,
+            };
+            let moves: Vec<MoveGeometry> = tp
+                .moves
+                .windows(2)
+                .filter(|w| w[1].kind != MoveKind::Rapid)
+                .map(|w| MoveGeometry {
+                    a: w[0].pose,
+                    b: w[1].pose,
+                    puck,
+                })
+                .collect();
+            // Starting inside the cutter above its corner: entered at the start.
+            let in_column = moves.iter().any(|g| g.column_holds(o));
+            columns += usize::from(in_column);
+            let brute = if in_column {
+                0.0
+            } else {
+                moves
+                    .iter()
+                    .filter_map(|g| g.translation_entry(&line).filter(|e| e.normal.dot(n) < 0.0))
+                    .map(|e| e.s)
+                    .fold(f64::INFINITY, f64::min)
+            };
+            let got = got.unwrap_or(f64::INFINITY);
+            if brute.is_infinite() {
+                assert!(
+                    got.is_infinite(),
+                    "{spec}: {o:?}: read {got}, nothing there"
+                );
+                continue;
+            }
+            assert!(
+                got >= brute - 1e-9,
+                "{spec}: {o:?}: read {got} below {brute}"
+            );
+            if brute < 1.0 {
+                gouges += 1;
+                assert!(
+                    (got - brute).abs() <= 1e-9,
+                    "{spec}: gouge at {o:?}: read {got}, brute force {brute}"
+                );
+            } else if got > brute + 1e-9 {
+                higher += 1;
+                worst = worst.max(got - brute);
+            }
+        }
+        println!(
+            "{spec}: {} lines, {gouges} gouges exact ({columns} starting inside the cutter \
+             above its corner), {higher} readings of material left higher than the puck's \
+             (by up to {worst:.4} mm)",
+            lines.len()
+        );
+        assert!(gouges > 100, "{spec}: the program gouges: {gouges}");
+        if spec == "flat:6" {
+            // A flat end mill at a ball's tips sinks more than 1 mm into the dome's flanks.
+            assert!(columns > 100, "{spec}: {columns} lines start in the column");
+        }
+        assert!(
+            higher * 100 <= lines.len(),
+            "{spec}: {higher} higher readings"
+        );
+    }
+}

@@ -1,0 +1,425 @@
+//! Exact first entry of a line into the cutter's *column*: the solid cylinder of radius
+//! `R = a + r` above the torus centre plane, unbounded along the axis (the flutes, the shank
+//! and what holds them). Together with the puck ([`crate::exact`]) it is the whole cutter,
+//! so a line that starts inside the cutter, or comes at it from the side above its corner,
+//! enters where the cutter is — not only where its lower part is.
+//!
+//! For one pose the column is a half-infinite cylinder: a quadratic and a half-line. For a
+//! translation (centre `c0 + u·d`, `u ∈ [0, 1]`, fixed axis `k`) the union over the move is
+//! convex (a Minkowski sum of the column and a segment): with `q(s, u) = o + s·n − c0 − u·d`
+//! the set of `(s, u)` with `|q_⊥| ≤ R`, `q·k ≥ 0` and `0 ≤ u ≤ 1` is convex, and the smallest
+//! `s` in it lies where one or two of these constraints are active. Each such place gives a
+//! candidate `s` in closed form (a linear equation or a quadratic); the answer is the smallest
+//! candidate at which some `u` satisfies all three (itself a pair of intervals in `u`).
+
+use cam_core::DVec3;
+
+use crate::exact::{Entry, Line};
+
+/// Relative slack (of the problem's size) allowed to the feasibility of a candidate: the
+/// candidates are computed boundary points, which rounding may put just outside.
+const FEAS_REL: f64 = 1e-9;
+
+/// The two roots of `qa·t² + 2·qb·t + qc = 0`, ordered, if real (`qa > 0`).
+fn roots(qa: f64, qb: f64, qc: f64) -> Option<(f64, f64)> {
+    let disc = qb * qb - qa * qc;
+    if disc.is_nan() || disc < 0.0 || qa <= 0.0 {
+        return None;
+    }
+    let sq = disc.sqrt();
+    let q = -qb - qb.signum() * sq;
+    let (r1, r2) = if q != 0.0 {
+        (q / qa, qc / q)
+    } else {
+        (0.0, 0.0)
+    };
+    Some((r1.min(r2), r1.max(r2)))
+}
+
+/// First entry of `line` into the half-infinite cylinder of radius `radius` about the axis
+/// `k` (unit) from base centre `c` upward (`(x − c)·k ≥ 0`): side, base disk, or `lo` (with
+/// normal `−n`) when the line starts inside.
+pub fn column_entry(line: &Line, c: DVec3, k: DVec3, radius: f64) -> Option<Entry> {
+    let (m, n) = (line.o - c, line.n);
+    let (mk, nk) = (m.dot(k), n.dot(k));
+    // Axial half-line: mk + s·nk ≥ 0.
+    let (mut lo, mut hi) = (line.lo, line.hi);
+    let mut base = None;
+    if nk > 0.0 {
+        let s = -mk / nk;
+        if s > lo {
+            lo = s;
+            base = Some(s);
+        }
+    } else if nk < 0.0 {
+        hi = hi.min(-mk / nk);
+    } else if mk < 0.0 {
+        return None;
+    }
+    let (mp, np) = (m - mk * k, n - nk * k);
+    let qa = np.length_squared();
+    let qc = mp.length_squared() - radius * radius;
+    let mut side = None;
+    if qa > 1e-300 {
+        let (r1, r2) = roots(qa, mp.dot(np), qc)?;
+        if r1 > lo {
+            lo = r1;
+            side = Some(r1);
+        }
+        hi = hi.min(r2);
+    } else if qc > 0.0 {
+        return None;
+    }
+    if lo > hi {
+        return None;
+    }
+    let normal = if side == Some(lo) {
+        ((mp + lo * np) / radius).normalize_or(-n)
+    } else if base == Some(lo) {
+        -k
+    } else {
+        -n
+    };
+    Some(Entry { s: lo, normal })
+}
+
+/// First entry of `line` into the union of the columns of radius `radius` about the axis `k`
+/// (unit) with base centres on the segment `c0 → c1` (a translation), in closed form (see
+/// the module docs). The normal is the outward normal of the union at the entry where one
+/// constraint is active there, else a normal of an active piece (`−n` when the line starts
+/// inside); it always faces against the line.
+pub fn column_translation_entry(
+    line: &Line,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+    radius: f64,
+) -> Option<Entry> {
+    let d = c1 - c0;
+    let (o, n) = (line.o - c0, line.n);
+    // Axial and radial parts: a(s, u) = ak + s·nk − u·dk; P(s, u) = ap + s·np − u·dp.
+    let (ak, nk, dk) = (o.dot(k), n.dot(k), d.dot(k));
+    let (ap, np, dp) = (o - ak * k, n - nk * k, d - dk * k);
+    let scale = 1.0 + radius + o.length() + d.length();
+    let tol = FEAS_REL * scale;
+    // Quick rejection: the line must come within R of the move's line across it (the slab
+    // `|P·f| ≤ R`, `f` across the move in the plane ⟂ k) and above the lower end's base
+    // plane, somewhere in `[lo, hi]`.
+    {
+        let (mut lo, mut hi) = (line.lo - tol, line.hi + tol);
+        let dpl2 = dp.length_squared();
+        if dpl2 > 1e-300 {
+            let f = k.cross(dp) / dpl2.sqrt();
+            let (af, nf) = (ap.dot(f), np.dot(f));
+            let r = radius + tol;
+            if nf != 0.0 {
+                let (x, y) = ((-r - af) / nf, (r - af) / nf);
+                lo = lo.max(x.min(y));
+                hi = hi.min(x.max(y));
+            } else if af.abs() > r {
+                return None;
+            }
+        }
+        // a(s, u) ≥ 0 for some u: ak + s·nk ≥ min(0, dk).
+        let need = dk.min(0.0) - tol;
+        if nk > 0.0 {
+            lo = lo.max((need - ak) / nk);
+        } else if nk < 0.0 {
+            hi = hi.min((need - ak) / nk);
+        } else if ak < need {
+            return None;
+        }
+        if lo > hi {
+            return None;
+        }
+    }
+    // Whether some u ∈ [0, 1] puts x(s) in a column.
+    let feasible = |s: f64| -> bool {
+        let (mut ul, mut uh) = (0.0f64, 1.0f64);
+        let a0 = ak + s * nk;
+        // a0 − u·dk ≥ −tol.
+        if dk > 0.0 {
+            uh = uh.min((a0 + tol) / dk);
+        } else if dk < 0.0 {
+            ul = ul.max((a0 + tol) / dk);
+        } else if a0 < -tol {
+            return false;
+        }
+        let p0 = ap + s * np;
+        let qa = dp.length_squared();
+        let r = radius + tol;
+        if qa > 1e-300 {
+            let Some((r1, r2)) = roots(qa, -p0.dot(dp), p0.length_squared() - r * r) else {
+                return false;
+            };
+            ul = ul.max(r1);
+            uh = uh.min(r2);
+        } else if p0.length_squared() > r * r {
+            return false;
+        }
+        ul <= uh + 1e-12
+    };
+    let mut cands: Vec<f64> = Vec::with_capacity(8);
+    cands.push(line.lo);
+    let mut ends: Vec<Entry> = Vec::with_capacity(2);
+    for c in [c0, c1] {
+        if let Some(e) = column_entry(line, c, k, radius) {
+            ends.push(e);
+        }
+    }
+    // The base plane of a column with u free (a level move's bottom).
+    if nk != 0.0 {
+        cands.push(-ak / nk);
+    }
+    let dpl = dp.length();
+    if dpl > 1e-12 * scale {
+        // Radial active, u free: the slab |(ap + s·np)·f| ≤ R across the move's direction.
+        let e = dp / dpl;
+        let f = k.cross(e);
+        let (af, nf) = (ap.dot(f), np.dot(f));
+        if nf != 0.0 {
+            cands.push((-radius - af) / nf);
+            cands.push((radius - af) / nf);
+        }
+    } else {
+        // Along the axis: the cylinder itself.
+        if let Some((r1, _)) = roots(np.length_squared(), ap.dot(np), {
+            ap.length_squared() - radius * radius
+        }) {
+            cands.push(r1);
+        }
+    }
+    if dk != 0.0 {
+        // Axial and radial active: u = (ak + s·nk)/dk, |P|² = R².
+        let (p0, p1) = (ap - (ak / dk) * dp, np - (nk / dk) * dp);
+        if let Some((r1, r2)) = roots(
+            p1.length_squared(),
+            p0.dot(p1),
+            p0.length_squared() - radius * radius,
+        ) {
+            cands.push(r1);
+            cands.push(r2);
+        }
+    }
+    let mut best: Option<Entry> = None;
+    for e in ends {
+        if best.is_none_or(|b| e.s < b.s) {
+            best = Some(e);
+        }
+    }
+    for s in cands {
+        if !(s >= line.lo && s <= line.hi) || best.is_some_and(|b| s >= b.s) {
+            continue;
+        }
+        if feasible(s) {
+            best = Some(Entry {
+                s,
+                normal: normal_at(line, s, (ap, np, dp), (ak, nk, dk), k, radius),
+            });
+        }
+    }
+    best
+}
+
+/// An outward normal of the union of columns where the line enters it at `s` (after
+/// [`column_translation_entry`] found `s` feasible and least): `−n` at `lo`; else from the
+/// constraints active at the `u` nearest the middle of the feasible range.
+fn normal_at(
+    line: &Line,
+    s: f64,
+    (ap, np, dp): (DVec3, DVec3, DVec3),
+    (ak, nk, dk): (f64, f64, f64),
+    k: DVec3,
+    radius: f64,
+) -> DVec3 {
+    let n = line.n;
+    if s <= line.lo {
+        return -n;
+    }
+    let p0 = ap + s * np;
+    let a0 = ak + s * nk;
+    // The u where the radial distance is least (clamped), and where the axial one binds.
+    let qa = dp.length_squared();
+    let u_r = if qa > 1e-300 {
+        (p0.dot(dp) / qa).clamp(0.0, 1.0)
+    } else {
+        0.5
+    };
+    let p = p0 - u_r * dp;
+    let a = a0 - u_r * dk;
+    let radial = p.length() >= radius * (1.0 - 1e-9);
+    let axial = a <= 1e-9 * (1.0 + radius);
+    let g = match (radial, axial) {
+        (true, false) => p,
+        (false, true) => -k,
+        (true, true) => {
+            // The sheared bottom rim: the radial gradient less its part along the move,
+            // carried by the axial constraint.
+            if dk != 0.0 {
+                p - (p.dot(dp) / dk) * k
+            } else {
+                p - radius * k
+            }
+        }
+        (false, false) => -n,
+    };
+    let g = g.normalize_or(-n);
+    if g.dot(n) < 0.0 { g } else { -n }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brute force: the least entry over many column instances along the move.
+    fn brute(line: &Line, c0: DVec3, c1: DVec3, k: DVec3, r: f64, samples: usize) -> Option<f64> {
+        (0..=samples)
+            .filter_map(|i| {
+                let u = i as f64 / samples as f64;
+                column_entry(line, c0 + u * (c1 - c0), k, r).map(|e| e.s)
+            })
+            .fold(None, |b: Option<f64>, s| Some(b.map_or(s, |b| b.min(s))))
+    }
+
+    /// A small deterministic generator.
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, lo: f64, hi: f64) -> f64 {
+            lo + (hi - lo) * self.next()
+        }
+        fn unit(&mut self) -> DVec3 {
+            loop {
+                let v = DVec3::new(
+                    self.range(-1.0, 1.0),
+                    self.range(-1.0, 1.0),
+                    self.range(-1.0, 1.0),
+                );
+                if v.length() > 0.1 && v.length() < 1.0 {
+                    return v.normalize();
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn one_pose_side_base_and_inside() {
+        let k = DVec3::Z;
+        let c = DVec3::ZERO;
+        // From the side, above the base.
+        let l = Line {
+            o: DVec3::new(5.0, 0.0, 2.0),
+            n: -DVec3::X,
+            lo: 0.0,
+            hi: 10.0,
+        };
+        let e = column_entry(&l, c, k, 3.0).unwrap();
+        assert!((e.s - 2.0).abs() < 1e-12 && (e.normal - DVec3::X).length() < 1e-12);
+        // From below, through the base.
+        let l = Line {
+            o: DVec3::new(1.0, 0.0, -2.0),
+            n: DVec3::Z,
+            lo: 0.0,
+            hi: 10.0,
+        };
+        let e = column_entry(&l, c, k, 3.0).unwrap();
+        assert!((e.s - 2.0).abs() < 1e-12 && (e.normal + k).length() < 1e-12);
+        // Starting inside.
+        let l = Line {
+            o: DVec3::new(1.0, 0.0, 2.0),
+            n: DVec3::X,
+            lo: 0.0,
+            hi: 10.0,
+        };
+        assert_eq!(column_entry(&l, c, k, 3.0).unwrap().s, 0.0);
+        // Below the base, going down: never.
+        let l = Line {
+            o: DVec3::new(1.0, 0.0, -1.0),
+            n: -DVec3::Z,
+            lo: 0.0,
+            hi: 10.0,
+        };
+        assert!(column_entry(&l, c, k, 3.0).is_none());
+    }
+
+    /// The closed form equals the least entry over dense column instances (which lies at
+    /// most the instances' spacing above it, and never below), for random lines and moves:
+    /// climbing, level and axial, vertical and tilted axes.
+    #[test]
+    fn translation_matches_instances() {
+        let mut g = Lcg(7);
+        let mut compared = 0;
+        for case in 0..3000 {
+            let k = if case % 3 == 0 { DVec3::Z } else { g.unit() };
+            let r = g.range(0.5, 4.0);
+            let c0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
+            let d = match case % 4 {
+                0 => g.unit() * g.range(0.1, 5.0),
+                1 => {
+                    // Level across the axis.
+                    let u = g.unit();
+                    (u - u.dot(k) * k).normalize_or(DVec3::X) * g.range(0.1, 5.0)
+                }
+                2 => k * g.range(-5.0, 5.0),
+                _ => g.unit() * g.range(0.0, 0.2),
+            };
+            let c1 = c0 + d;
+            // Aimed near the move, or anywhere.
+            let o = DVec3::new(g.range(-8.0, 8.0), g.range(-8.0, 8.0), g.range(-8.0, 8.0));
+            let aim = c0 + g.next() * d + g.unit() * g.range(0.0, 1.5 * r);
+            let n = if case % 5 == 4 {
+                g.unit()
+            } else {
+                (aim - o).normalize_or(DVec3::X)
+            };
+            let line = Line {
+                o,
+                n,
+                lo: 0.0,
+                hi: 16.0,
+            };
+            let samples = 4000;
+            let exact = column_translation_entry(&line, c0, c1, k, r);
+            let b = brute(&line, c0, c1, k, r, samples);
+            // x is in the union up to the instances' spacing.
+            let tol = d.length() / samples as f64 + 1e-9;
+            let inside = |x: DVec3| {
+                (0..=samples).any(|i| {
+                    let q = x - (c0 + (i as f64 / samples as f64) * d);
+                    let qk = q.dot(k);
+                    qk >= -tol && (q - qk * k).length() <= r + tol
+                })
+            };
+            match (exact, b) {
+                (None, None) => {}
+                (Some(e), b) => {
+                    compared += usize::from(b.is_some());
+                    if let Some(b) = b {
+                        assert!(
+                            e.s <= b + 1e-9,
+                            "case {case}: exact {} above instances {b}",
+                            e.s
+                        );
+                    }
+                    assert!(
+                        inside(line.o + e.s * line.n),
+                        "case {case}: {} outside",
+                        e.s
+                    );
+                    assert!(
+                        e.normal.dot(line.n) < 0.0,
+                        "case {case}: normal faces along"
+                    );
+                }
+                (None, Some(b)) => panic!("case {case}: missed an entry at {b}"),
+            }
+        }
+        assert!(compared > 2000, "{compared}");
+    }
+}
