@@ -1001,23 +1001,18 @@ fn measure_vectors(
         }
         // A gouge deeper than the vector reaches into the part: the vector starts inside the
         // cutter and may cross none of the imprint surface's triangles (the corner is all
-        // they hold). The moves whose cutter holds the vertex are found by its point, and
-        // where one holds the start too, the vertex is gouged at least as deep as the
-        // vector reaches.
+        // they hold). The moves whose cutter holds the vector's start are found by its
+        // point, and where one holds the vertex too, the vertex is gouged at least as deep
+        // as the vector reaches.
         if let Some(columns) = &columns
             && best.is_none_or(|b| b.0.s > v.lo)
         {
             let start = line.o + line.lo * line.n;
-            let vertex = Line {
-                lo: 0.0,
-                hi: 0.0,
-                ..line
-            };
-            columns.visit(&vertex, 0.0, |ci, hi| {
+            columns.visit(&line, line.lo, |ci, hi| {
                 let mv = columns.items[ci].1;
                 if let Some(g) = rf.feed_geometry(mv)
-                    && g.cutter_holds(line.o)
                     && g.cutter_holds(start)
+                    && g.cutter_holds(line.o)
                 {
                     stats[1] += 1;
                     let e = Entry {
