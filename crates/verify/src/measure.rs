@@ -807,7 +807,30 @@ fn measure_vectors(
         puck,
     };
     let extras = exact.then(|| Extras::new(models));
-    let columns = exact.then(|| Extras::columns(models, toolpath));
+    // Both surface models: a gouge deeper than the vectors reach shows on neither's
+    // triangles.
+    let columns = Extras::columns(models, toolpath);
+    // The lowest-numbered move whose cutter holds both the vector's start and its vertex,
+    // if any: the vertex is gouged at least as deep as the vector reaches. (The vector
+    // starts inside the cutter and may cross none of the imprint surface's triangles, which
+    // hold its corner only.) The moves whose cutter holds the start are found by its point.
+    let deep_gouge = |line: &Line, tests: &mut usize| -> Option<u32> {
+        let start = line.o + line.lo * line.n;
+        let mut found: Option<u32> = None;
+        columns.visit(line, line.lo, |ci, hi| {
+            let mv = columns.items[ci].1;
+            if found.is_none_or(|f| mv < f)
+                && let Some(g) = rf.feed_geometry(mv)
+                && g.cutter_holds(start)
+                && g.cutter_holds(line.o)
+            {
+                *tests += 1;
+                found = Some(mv);
+            }
+            hi
+        });
+        found
+    };
     let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
     let move_of = |c: &Crossing| {
         let (piece, _) = unkey(c.key);
@@ -838,6 +861,19 @@ fn measure_vectors(
         let low_src = low.map(source_of);
         if !exact {
             stats[0] = usize::from(low.is_some());
+            let line = Line {
+                o: v.o,
+                n: v.n,
+                lo: v.lo,
+                hi: v.hi,
+            };
+            if linear.is_none_or(|l| l.0 > v.lo)
+                && let Some(mv) = deep_gouge(&line, &mut stats[1])
+            {
+                stats[0] = 1;
+                let src = Some(Source::Move(mv));
+                return (dev(Some(v.lo), Some(mv)), -1.0, Some(v.lo), src, stats);
+            }
             return match linear {
                 Some((s, mv, fc)) => (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats),
                 None => (dev(None, None), 0.0, None, None, stats),
@@ -999,30 +1035,15 @@ fn measure_vectors(
                 best.map_or(hi, |b| b.0.s.min(hi))
             });
         }
-        // A gouge deeper than the vector reaches into the part: the vector starts inside the
-        // cutter and may cross none of the imprint surface's triangles (the corner is all
-        // they hold). The moves whose cutter holds the vector's start are found by its
-        // point, and where one holds the vertex too, the vertex is gouged at least as deep
-        // as the vector reaches.
-        if let Some(columns) = &columns
-            && best.is_none_or(|b| b.0.s > v.lo)
+        // A gouge deeper than the vector reaches (see `deep_gouge`).
+        if best.is_none_or(|b| b.0.s > v.lo)
+            && let Some(mv) = deep_gouge(&line, &mut stats[1])
         {
-            let start = line.o + line.lo * line.n;
-            columns.visit(&line, line.lo, |ci, hi| {
-                let mv = columns.items[ci].1;
-                if let Some(g) = rf.feed_geometry(mv)
-                    && g.cutter_holds(start)
-                    && g.cutter_holds(line.o)
-                {
-                    stats[1] += 1;
-                    let e = Entry {
-                        s: line.lo,
-                        normal: -line.n,
-                    };
-                    better(e, mv, (COLUMN, mv as u64), Source::Move(mv), &mut best);
-                }
-                hi
-            });
+            let e = Entry {
+                s: line.lo,
+                normal: -line.n,
+            };
+            better(e, mv, (COLUMN, mv as u64), Source::Move(mv), &mut best);
         }
         match (best, linear) {
             (Some((e, mv, _, src)), _) => {

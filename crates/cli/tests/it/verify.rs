@@ -226,7 +226,8 @@ fn plunge_into_a_wall_is_a_gouge_on_either_side() {
 
 /// A flat end mill run 2 mm deep across a box: its flat bottom is 1 mm below where the
 /// vectors from the top face start, so only the cutter above its corner meets them. (The
-/// verifier modelled the corner alone and passed this slot with no gouge and exit 0.)
+/// verifier modelled the corner alone and passed this slot with no gouge and exit 0, on
+/// either surface model.)
 #[test]
 fn slot_deeper_than_the_vectors_reach_is_a_gouge() {
     let d = tempfile::tempdir().unwrap();
@@ -236,7 +237,12 @@ fn slot_deeper_than_the_vectors_reach_is_a_gouge() {
         "slot.ngc",
         "G21 G90 G17\nG0 Z10\nG0 X-5 Y5\nG1 Z3 F100\nG1 X15 F500\nG0 Z10\nM30\n",
     );
-    for tool in ["flat:6", "bull:6:1.5", "ball:6"] {
+    for (tool, surface) in [
+        ("flat:6", "exact"),
+        ("bull:6:1.5", "exact"),
+        ("ball:6", "exact"),
+        ("flat:6", "linear"),
+    ] {
         let o = cam(&[
             "verify",
             ngc.to_str().unwrap(),
@@ -244,6 +250,8 @@ fn slot_deeper_than_the_vectors_reach_is_a_gouge() {
             part.to_str().unwrap(),
             "--tool",
             tool,
+            "--surface",
+            surface,
             "--json",
         ]);
         assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
