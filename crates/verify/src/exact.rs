@@ -708,36 +708,30 @@ impl MoveGeometry {
             // A flat end mill's puck is its disk, which holds nothing the column does not.
             return self.column_holds(p);
         }
-        if self.puck.a == 0.0 && self.is_translation() {
+        if !self.is_translation() {
+            return self.column_holds(p) || self.depth_at(p) > 0.0;
+        }
+        let (c0, k) = self.centre_axis(0.0);
+        let (c1, _) = self.centre_axis(1.0);
+        let d = c1 - c0;
+        let t = if d.length_squared() > 0.0 {
+            ((p - c0).dot(d) / d.length_squared()).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let dist = p.distance(c0 + t * d);
+        if self.puck.a == 0.0 {
             // A ball's swept puck is the capsule about the centre's segment.
-            let (c0, _) = self.centre_axis(0.0);
-            let (c1, _) = self.centre_axis(1.0);
-            let d = c1 - c0;
-            let t = if d.length_squared() > 0.0 {
-                ((p - c0).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            return p.distance(c0 + t * d) < self.puck.r || self.column_holds(p);
+            return dist < self.puck.r || self.column_holds(p);
         }
         if self.column_holds(p) {
             return true;
         }
-        if self.is_translation() {
-            // Outside the capsule of radius a + r about the centre's segment, or below the
-            // lower centre plane by more than r: not in the swept puck.
-            let (c0, k) = self.centre_axis(0.0);
-            let (c1, _) = self.centre_axis(1.0);
-            let d = c1 - c0;
-            let t = if d.length_squared() > 0.0 {
-                ((p - c0).dot(d) / d.length_squared()).clamp(0.0, 1.0)
-            } else {
-                0.0
-            };
-            let below = (p - c0).dot(k) - d.dot(k).min(0.0);
-            if p.distance(c0 + t * d) >= self.puck.a + self.puck.r || below <= -self.puck.r {
-                return false;
-            }
+        // Outside the capsule of radius a + r about the centre's segment, or below the lower
+        // centre plane by more than r: not in the swept puck.
+        let below = (p - c0).dot(k) - d.dot(k).min(0.0);
+        if dist >= self.puck.a + self.puck.r || below <= -self.puck.r {
+            return false;
         }
         self.depth_at(p) > 0.0
     }

@@ -389,9 +389,9 @@ impl Refiner<'_> {
     }
 }
 
-/// What the exact measurement searches directly rather than locating by triangles, in a
+/// What the measurement searches directly rather than locating by triangles, in a
 /// hierarchy of boxes. Two sets:
-/// * caps (the tool at one pose) and gaps (a step whose strip is missing because the
+/// * for the exact surface, caps (the tool at one pose) and gaps (a step whose strip is missing because the
 ///   imprinted half flips, or a step along the axis). Box: for a cap, or a gap whose axis
 ///   does not turn, the box of its puck at its pose(s), exact for a torus of major radius
 ///   `a` and tube `r` about the unit axis `k` (half-extent `a·√(1 − k_i²) + r` along axis
@@ -399,8 +399,8 @@ impl Refiner<'_> {
 ///   whose axis turns, the capsule's box. Each is also bounded by the capsule of radius `R`
 ///   about its centre segment (a cap's sphere), exact for a ball; the box is much tighter
 ///   along a vertical axis (a flat end mill's disk is `2R` wide but has no height);
-/// * every feed move's whole cutter, puck and column ([`crate::column`]), for the vectors
-///   that start inside it: the box of the radius-`R` disks at its two ends' centres grown by
+/// * for both surfaces, every feed move's whole cutter, puck and column
+///   ([`crate::column`]), for the vectors that start inside it: the box of the radius-`R` disks at its two ends' centres grown by
 ///   `r` (the puck below), unbounded along every coordinate the axis climbs in (both ways
 ///   where the axis turns through it).
 struct Extras {

@@ -181,6 +181,29 @@ fn box_obj(x0: f64, x1: f64) -> String {
     s
 }
 
+/// `cam verify NGC --part PART --tool TOOL --surface SURFACE --json`, which must exit 1 (a
+/// gouge beyond the tolerance); its report.
+fn verify_gouging(
+    ngc: &std::path::Path,
+    part: &std::path::Path,
+    tool: &str,
+    surface: &str,
+) -> serde_json::Value {
+    let o = cam(&[
+        "verify",
+        ngc.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        tool,
+        "--surface",
+        surface,
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{tool} {surface}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
 /// A plunge whose side cuts 0.2 mm into a wall is a gouge whichever side the wall is on: a
 /// move along the tool axis has no front half, both halves of its wall cut. (The verifier
 /// used to model one half only, and passed this program on one side with no finding.) The
@@ -196,17 +219,7 @@ fn plunge_into_a_wall_is_a_gouge_on_either_side() {
             &format!("{name}.ngc"),
             &format!("G21 G90 G17\nG0 Z10\nG0 X{tool_x} Y5\nG0 Z3.5\nG1 Z2 F100\nG0 Z10\nM30\n"),
         );
-        let o = cam(&[
-            "verify",
-            ngc.to_str().unwrap(),
-            "--part",
-            part.to_str().unwrap(),
-            "--tool",
-            "flat:6",
-            "--json",
-        ]);
-        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
-        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let j = verify_gouging(&ngc, &part, "flat:6", "exact");
         let g = j["max_gouge_mm"].as_f64().unwrap();
         assert!((g - 1.0).abs() < 1e-9, "{name}: max gouge {g}");
         let worst = j["worst_gouges"].as_array().unwrap();
@@ -243,22 +256,10 @@ fn slot_deeper_than_the_vectors_reach_is_a_gouge() {
         ("ball:6", "exact"),
         ("flat:6", "linear"),
     ] {
-        let o = cam(&[
-            "verify",
-            ngc.to_str().unwrap(),
-            "--part",
-            part.to_str().unwrap(),
-            "--tool",
-            tool,
-            "--surface",
-            surface,
-            "--json",
-        ]);
-        assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
-        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let j = verify_gouging(&ngc, &part, tool, surface);
         let g = j["max_gouge_mm"].as_f64().unwrap();
         assert!(g >= 1.0 - 1e-9, "{tool}: max gouge {g}");
-        // The top face over the slot, 6 mm wide: every measured vertex there is gouged.
+        // The top face over the slot is among the worst gouges.
         let top = j["worst_gouges"]
             .as_array()
             .unwrap()

@@ -3,6 +3,7 @@
 //! tool instances along the move.
 
 use cam_core::DVec3;
+use cam_verify::column::{column_entry, column_translation_entry};
 use cam_verify::exact::{Line, Puck, convex_translation_entry, disk_translation_entry, puck_entry};
 
 /// Deterministic pseudo-random numbers in [0, 1).
@@ -353,4 +354,96 @@ fn bull_translation_matches_instances_on_any_move() {
     // Instances 0.004 mm apart: a grazing line may meet the sweep up to that much (over its
     // incidence) before the first instance it meets.
     assert!(worst < 0.05, "brute force off by {worst} mm");
+}
+
+/// Brute force: the least entry over many column instances along the move.
+fn brute_column(
+    line: &Line,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+    r: f64,
+    samples: usize,
+) -> Option<f64> {
+    (0..=samples)
+        .filter_map(|i| {
+            let u = i as f64 / samples as f64;
+            column_entry(line, c0 + u * (c1 - c0), k, r).map(|e| e.s)
+        })
+        .fold(None, |b: Option<f64>, s| Some(b.map_or(s, |b| b.min(s))))
+}
+
+/// The closed form equals the least entry over dense column instances (which lies at
+/// most the instances' spacing above it, and never below), for random lines and moves:
+/// climbing, level and axial, vertical and tilted axes.
+#[test]
+fn column_translation_matches_instances() {
+    let mut g = Lcg(7);
+    let mut compared = 0;
+    for case in 0..3000 {
+        let k = if case % 3 == 0 { DVec3::Z } else { g.unit() };
+        let r = g.range(0.5, 4.0);
+        let c0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
+        let d = match case % 4 {
+            0 => g.unit() * g.range(0.1, 5.0),
+            1 => {
+                // Level across the axis.
+                let u = g.unit();
+                (u - u.dot(k) * k).normalize_or(DVec3::X) * g.range(0.1, 5.0)
+            }
+            2 => k * g.range(-5.0, 5.0),
+            _ => g.unit() * g.range(0.0, 0.2),
+        };
+        let c1 = c0 + d;
+        // Aimed near the move, or anywhere.
+        let o = DVec3::new(g.range(-8.0, 8.0), g.range(-8.0, 8.0), g.range(-8.0, 8.0));
+        let aim = c0 + g.next() * d + g.unit() * g.range(0.0, 1.5 * r);
+        let n = if case % 5 == 4 {
+            g.unit()
+        } else {
+            (aim - o).normalize_or(DVec3::X)
+        };
+        let line = Line {
+            o,
+            n,
+            lo: 0.0,
+            hi: 16.0,
+        };
+        let samples = 4000;
+        let exact = column_translation_entry(&line, c0, c1, k, r);
+        let b = brute_column(&line, c0, c1, k, r, samples);
+        // x is in the union up to the instances' spacing.
+        let tol = d.length() / samples as f64 + 1e-9;
+        let inside = |x: DVec3| {
+            (0..=samples).any(|i| {
+                let q = x - (c0 + (i as f64 / samples as f64) * d);
+                let qk = q.dot(k);
+                qk >= -tol && (q - qk * k).length() <= r + tol
+            })
+        };
+        match (exact, b) {
+            (None, None) => {}
+            (Some(e), b) => {
+                compared += usize::from(b.is_some());
+                if let Some(b) = b {
+                    assert!(
+                        e.s <= b + 1e-9,
+                        "case {case}: exact {} above instances {b}",
+                        e.s
+                    );
+                }
+                assert!(
+                    inside(line.o + e.s * line.n),
+                    "case {case}: {} outside",
+                    e.s
+                );
+                assert!(
+                    e.normal.dot(line.n) < 0.0,
+                    "case {case}: normal faces along"
+                );
+            }
+            (None, Some(b)) => panic!("case {case}: missed an entry at {b}"),
+        }
+    }
+    assert!(compared > 2000, "{compared}");
 }
