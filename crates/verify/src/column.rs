@@ -159,17 +159,27 @@ pub fn column_translation_entry(
         }
         ul <= uh + 1e-12
     };
-    let mut cands: Vec<f64> = Vec::with_capacity(8);
-    cands.push(line.lo);
-    let mut ends: Vec<Entry> = Vec::with_capacity(2);
+    // At most six candidates (unused slots stay NaN and are skipped); no allocation on
+    // this hot path.
+    let mut cands = [f64::NAN; 6];
+    let mut nc = 0;
+    let mut push = |s: f64| {
+        cands[nc] = s;
+        nc += 1;
+    };
+    push(line.lo);
+    // The columns at the two ends (u fixed at a bound): their own entries.
+    let mut best: Option<Entry> = None;
     for c in [c0, c1] {
-        if let Some(e) = column_entry(line, c, k, radius) {
-            ends.push(e);
+        if let Some(e) = column_entry(line, c, k, radius)
+            && best.is_none_or(|b| e.s < b.s)
+        {
+            best = Some(e);
         }
     }
     // The base plane of a column with u free (a level move's bottom).
     if nk != 0.0 {
-        cands.push(-ak / nk);
+        push(-ak / nk);
     }
     let dpl = dp.length();
     if dpl > 1e-12 * scale {
@@ -178,15 +188,15 @@ pub fn column_translation_entry(
         let f = k.cross(e);
         let (af, nf) = (ap.dot(f), np.dot(f));
         if nf != 0.0 {
-            cands.push((-radius - af) / nf);
-            cands.push((radius - af) / nf);
+            push((-radius - af) / nf);
+            push((radius - af) / nf);
         }
     } else {
         // Along the axis: the cylinder itself.
         if let Some((r1, _)) = roots(np.length_squared(), ap.dot(np), {
             ap.length_squared() - radius * radius
         }) {
-            cands.push(r1);
+            push(r1);
         }
     }
     if dk != 0.0 {
@@ -197,14 +207,8 @@ pub fn column_translation_entry(
             p0.dot(p1),
             p0.length_squared() - radius * radius,
         ) {
-            cands.push(r1);
-            cands.push(r2);
-        }
-    }
-    let mut best: Option<Entry> = None;
-    for e in ends {
-        if best.is_none_or(|b| e.s < b.s) {
-            best = Some(e);
+            push(r1);
+            push(r2);
         }
     }
     for s in cands {
