@@ -38,8 +38,15 @@ fn roots(qa: f64, qb: f64, qc: f64) -> Option<(f64, f64)> {
 
 /// First entry of `line` into the half-infinite cylinder of radius `radius` about the axis
 /// `k` (unit) from base centre `c` upward (`(x − c)·k ≥ 0`): side, base disk, or `lo` (with
-/// normal `−n`) when the line starts inside.
-pub fn column_entry(line: &Line, c: DVec3, k: DVec3, radius: f64) -> Option<Entry> {
+/// normal `−n`) when the line starts inside. With `base` false an entry through the base
+/// disk (which the cutter's puck covers) is not reported: `None` then.
+pub fn column_entry(
+    line: &Line,
+    c: DVec3,
+    k: DVec3,
+    radius: f64,
+    base_counts: bool,
+) -> Option<Entry> {
     let (m, n) = (line.o - c, line.n);
     let (mk, nk) = (m.dot(k), n.dot(k));
     // Axial half-line: mk + s·nk ≥ 0.
@@ -76,6 +83,9 @@ pub fn column_entry(line: &Line, c: DVec3, k: DVec3, radius: f64) -> Option<Entr
     let normal = if side == Some(lo) {
         ((mp + lo * np) / radius).normalize_or(-n)
     } else if base == Some(lo) {
+        if !base_counts {
+            return None;
+        }
         -k
     } else {
         -n
@@ -88,12 +98,18 @@ pub fn column_entry(line: &Line, c: DVec3, k: DVec3, radius: f64) -> Option<Entr
 /// the module docs). The normal is the outward normal of the union at the entry where one
 /// constraint is active there, else a normal of an active piece (`−n` when the line starts
 /// inside); it always faces against the line.
+///
+/// With `base` false the entries through the union's bottom (the swept base disk and its
+/// rim, which the cutter's puck covers) are not candidates: the answer is then the least
+/// of the start (if inside) and the entries through the side, a point of the union at or
+/// after the first entry, and the first entry itself whenever that is not on the bottom.
 pub fn column_translation_entry(
     line: &Line,
     c0: DVec3,
     c1: DVec3,
     k: DVec3,
     radius: f64,
+    base: bool,
 ) -> Option<Entry> {
     let d = c1 - c0;
     let (o, n) = (line.o - c0, line.n);
@@ -171,14 +187,14 @@ pub fn column_translation_entry(
     // The columns at the two ends (u fixed at a bound): their own entries.
     let mut best: Option<Entry> = None;
     for c in [c0, c1] {
-        if let Some(e) = column_entry(line, c, k, radius)
+        if let Some(e) = column_entry(line, c, k, radius, base)
             && best.is_none_or(|b| e.s < b.s)
         {
             best = Some(e);
         }
     }
     // The base plane of a column with u free (a level move's bottom).
-    if nk != 0.0 {
+    if base && nk != 0.0 {
         push(-ak / nk);
     }
     let dpl = dp.length();
@@ -199,7 +215,7 @@ pub fn column_translation_entry(
             push(r1);
         }
     }
-    if dk != 0.0 {
+    if base && dk != 0.0 {
         // Axial and radial active: u = (ak + s·nk)/dk, |P|² = R².
         let (p0, p1) = (ap - (ak / dk) * dp, np - (nk / dk) * dp);
         if let Some((r1, r2)) = roots(
@@ -286,7 +302,7 @@ mod tests {
             lo: 0.0,
             hi: 10.0,
         };
-        let e = column_entry(&l, c, k, 3.0).unwrap();
+        let e = column_entry(&l, c, k, 3.0, true).unwrap();
         assert!((e.s - 2.0).abs() < 1e-12 && (e.normal - DVec3::X).length() < 1e-12);
         // From below, through the base.
         let l = Line {
@@ -295,7 +311,7 @@ mod tests {
             lo: 0.0,
             hi: 10.0,
         };
-        let e = column_entry(&l, c, k, 3.0).unwrap();
+        let e = column_entry(&l, c, k, 3.0, true).unwrap();
         assert!((e.s - 2.0).abs() < 1e-12 && (e.normal + k).length() < 1e-12);
         // Starting inside.
         let l = Line {
@@ -304,7 +320,7 @@ mod tests {
             lo: 0.0,
             hi: 10.0,
         };
-        assert_eq!(column_entry(&l, c, k, 3.0).unwrap().s, 0.0);
+        assert_eq!(column_entry(&l, c, k, 3.0, true).unwrap().s, 0.0);
         // Below the base, going down: never.
         let l = Line {
             o: DVec3::new(1.0, 0.0, -1.0),
@@ -312,6 +328,6 @@ mod tests {
             lo: 0.0,
             hi: 10.0,
         };
-        assert!(column_entry(&l, c, k, 3.0).is_none());
+        assert!(column_entry(&l, c, k, 3.0, true).is_none());
     }
 }

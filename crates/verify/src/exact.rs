@@ -9,9 +9,9 @@
 //! (whose cylinder continues upward), so an entry into the puck is an entry into the cutter.
 //! A ball is the sphere of radius `r` about `c`; a flat end mill (`r = 0`) is the disk itself.
 //! Above the puck the cutter continues as its *column* ([`crate::column`]: the cylinder of
-//! radius `a + r` from the centre plane up, unbounded); the measurement tests it for vectors
-//! that start inside the cutter ([`MoveGeometry::cutter_holds`]), which the imprint surface
-//! of the corner cannot show.
+//! radius `a + r` from the centre plane up, unbounded), entered by
+//! [`MoveGeometry::column_entry`]; the imprint surface holds the corner only, so the
+//! measurement searches every move's column directly.
 //!
 //! # Motion model
 //! As in [`crate::sweep`]: along move `A → B` the tip moves linearly and the axis is
@@ -701,15 +701,14 @@ impl MoveGeometry {
         translation_entry(line, &self.puck, c0, c1, k)
     }
 
-    /// Whether `p` lies in the cutter somewhere along the move: in its puck
-    /// ([`MoveGeometry::depth_at`] above 0) or its column ([`MoveGeometry::column_holds`]).
-    pub fn cutter_holds(&self, p: DVec3) -> bool {
+    /// Whether `p` lies inside the puck swept along the move ([`MoveGeometry::depth_at`]
+    /// above 0). A flat end mill's puck is its disk, which holds no volume.
+    pub fn puck_holds(&self, p: DVec3) -> bool {
         if self.puck.r == 0.0 {
-            // A flat end mill's puck is its disk, which holds nothing the column does not.
-            return self.column_holds(p);
+            return false;
         }
         if !self.is_translation() {
-            return self.column_holds(p) || self.depth_at(p) > 0.0;
+            return self.depth_at(p) > 0.0;
         }
         let (c0, k) = self.centre_axis(0.0);
         let (c1, _) = self.centre_axis(1.0);
@@ -722,10 +721,7 @@ impl MoveGeometry {
         let dist = p.distance(c0 + t * d);
         if self.puck.a == 0.0 {
             // A ball's swept puck is the capsule about the centre's segment.
-            return dist < self.puck.r || self.column_holds(p);
-        }
-        if self.column_holds(p) {
-            return true;
+            return dist < self.puck.r;
         }
         // Outside the capsule of radius a + r about the centre's segment, or below the lower
         // centre plane by more than r: not in the swept puck.
@@ -736,34 +732,105 @@ impl MoveGeometry {
         self.depth_at(p) > 0.0
     }
 
-    /// Whether `p` lies in the cutter's column ([`crate::column`]: the cylinder of radius
-    /// `a + r` above the torus centre plane) somewhere along the move: exact for a
-    /// translation; for a rotating move, at its two poses.
-    pub fn column_holds(&self, p: DVec3) -> bool {
+    /// First entry of `line` into the cutter's column ([`crate::column`]: the cylinder of
+    /// radius `a + r` above the torus centre plane, unbounded up) swept along the move, `lo`
+    /// when the line starts inside; with `base` false, entries through its bottom (which
+    /// the puck covers) are left out (see [`crate::column::column_translation_entry`]). A
+    /// translation in closed form (exact); a rotating move by the least one-pose entry over
+    /// the poses at `u = 0, 1/8, …, 1`, refined by golden-section search within a pose of
+    /// the least (exact where the entry is unimodal in `u` there).
+    pub fn column_entry(&self, line: &Line, base: bool) -> Option<Entry> {
         let rr = self.puck.a + self.puck.r;
         if self.is_translation() {
-            // Below the lower base plane: not in any column.
             let (c0, k) = self.centre_axis(0.0);
             let (c1, _) = self.centre_axis(1.0);
-            if (p - c0).dot(k) < (c1 - c0).dot(k).min(0.0) - 1e-9 * (1.0 + rr) {
-                return false;
+            return crate::column::column_translation_entry(line, c0, c1, k, rr, base);
+        }
+        let at = |u: f64| {
+            let (c, k) = self.centre_axis(u);
+            crate::column::column_entry(line, c, k, rr, base)
+        };
+        const POSES: usize = 8;
+        let mut best: Option<(Entry, f64)> = None;
+        let consider = |e: Option<Entry>, u: f64, best: &mut Option<(Entry, f64)>| {
+            if let Some(e) = e
+                && best.is_none_or(|(b, _)| e.s < b.s)
+            {
+                *best = Some((e, u));
+            }
+        };
+        for i in 0..=POSES {
+            let u = i as f64 / POSES as f64;
+            consider(at(u), u, &mut best);
+        }
+        let (_, u_best) = best?;
+        let step = 1.0 / POSES as f64;
+        const G: f64 = 0.618_033_988_749_894_9;
+        let key = |e: &Option<Entry>| e.map_or(f64::INFINITY, |e| e.s);
+        let (mut lo, mut hi) = ((u_best - step).max(0.0), (u_best + step).min(1.0));
+        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+        let (mut e1, mut e2) = (at(x1), at(x2));
+        while hi - lo > 1e-12 {
+            if key(&e1) <= key(&e2) {
+                consider(e2, x2, &mut best);
+                hi = x2;
+                (x2, e2) = (x1, e1);
+                x1 = hi - G * (hi - lo);
+                e1 = at(x1);
+            } else {
+                consider(e1, x1, &mut best);
+                lo = x1;
+                (x1, e1) = (x2, e2);
+                x2 = lo + G * (hi - lo);
+                e2 = at(x2);
             }
         }
-        let at = Line {
-            o: p,
-            n: DVec3::Z,
-            lo: 0.0,
-            hi: 0.0,
-        };
-        if self.is_translation() {
-            let (c0, k) = self.centre_axis(0.0);
-            let (c1, _) = self.centre_axis(1.0);
-            return crate::column::column_translation_entry(&at, c0, c1, k, rr).is_some();
-        }
-        [0.0, 1.0].into_iter().any(|u| {
+        consider(e1, x1, &mut best);
+        consider(e2, x2, &mut best);
+        best.map(|(e, _)| e)
+    }
+
+    /// How deep `p` lies in the column swept along the move (mm, 0 outside): the largest
+    /// over the move of its depth in one pose's column, the lesser of its distances to the
+    /// cylinder's side and to its base plane. For a translation that is a concave function
+    /// of `u` and the maximum is found to 1e-12 in `u`; for a rotating move by the same
+    /// golden-section search. A lower bound of the depth in the union, equal to it away
+    /// from the swept bottom rim.
+    pub fn column_depth_at(&self, p: DVec3) -> f64 {
+        let rr = self.puck.a + self.puck.r;
+        let depth = |u: f64| {
             let (c, k) = self.centre_axis(u);
-            crate::column::column_entry(&at, c, k, rr).is_some()
-        })
+            let q = p - c;
+            let axial = q.dot(k);
+            (rr - (q - axial * k).length()).min(axial)
+        };
+        const G: f64 = 0.618_033_988_749_894_9;
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        let mut best = depth(0.0).max(depth(1.0));
+        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+        let (mut f1, mut f2) = (depth(x1), depth(x2));
+        while hi - lo > 1e-12 {
+            best = best.max(f1).max(f2);
+            if f1 >= f2 {
+                hi = x2;
+                (x2, f2) = (x1, f1);
+                x1 = hi - G * (hi - lo);
+                f1 = depth(x1);
+            } else {
+                lo = x1;
+                (x1, f1) = (x2, f2);
+                x2 = lo + G * (hi - lo);
+                f2 = depth(x2);
+            }
+        }
+        best.max(f1).max(f2).max(0.0)
+    }
+
+    /// How deep `p` lies in the whole cutter swept along the move, puck or column (mm, 0
+    /// outside): the larger of [`MoveGeometry::depth_at`] and
+    /// [`MoveGeometry::column_depth_at`].
+    pub fn cutter_depth_at(&self, p: DVec3) -> f64 {
+        self.depth_at(p).max(self.column_depth_at(p))
     }
 }
 

@@ -67,6 +67,9 @@ pub struct Measurement {
     pub linear_mm: Vec<Option<f64>>,
     /// Per vertex: what gave the answer (for the depth at creases).
     pub source: Vec<Option<Source>>,
+    /// Per vertex: the answer is the vector's start, which lies inside the cutter: the
+    /// vertex is gouged at least as deep as the vector reaches.
+    pub from_start: Vec<bool>,
     /// What was done.
     pub stats: MeasureStats,
 }
@@ -85,19 +88,37 @@ pub enum Source {
     },
 }
 
-/// How deep (mm) `p` lies inside the volume of `source` (a move's swept volume or the tool
-/// at a pose): `r` minus the distance to the swept disk ([`MoveGeometry::depth_at`]); 0
-/// when outside.
+/// How deep (mm) `p` lies inside the puck swept by `source` (along a move, or the tool at a
+/// pose): `r` minus the distance to the swept disk ([`MoveGeometry::depth_at`], exact for a
+/// translation); 0 when outside.
 pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source, p: DVec3) -> f64 {
-    let Some(first) = models.first() else {
-        return 0.0;
-    };
+    source_geometry(models, toolpath, source).map_or(0.0, |g| g.depth_at(p))
+}
+
+/// How deep (mm) `p` lies inside the whole cutter swept by `source`, puck or column
+/// ([`MoveGeometry::cutter_depth_at`]: in the column, a lower bound); 0 when outside.
+pub fn cutter_depth_inside(
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    source: Source,
+    p: DVec3,
+) -> f64 {
+    source_geometry(models, toolpath, source).map_or(0.0, |g| g.cutter_depth_at(p))
+}
+
+/// The move (or the one pose) that `source` names.
+fn source_geometry(
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    source: Source,
+) -> Option<MoveGeometry> {
+    let first = models.first()?;
     let puck = Puck::of(first.cutter());
     let g = match source {
         Source::Move(mv) => {
             let i = mv as usize;
             if i == 0 || i >= toolpath.moves.len() {
-                return 0.0;
+                return None;
             }
             MoveGeometry {
                 a: toolpath.moves[i - 1].pose,
@@ -106,12 +127,9 @@ pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source,
             }
         }
         Source::Pose { model, frame } => {
-            let Some(f) = models
+            let f = models
                 .get(model as usize)
-                .and_then(|m| m.frames.get(frame as usize))
-            else {
-                return 0.0;
-            };
+                .and_then(|m| m.frames.get(frame as usize))?;
             let pose = cam_core::Pose {
                 tip: f.tip(puck.r),
                 axis: f.axis,
@@ -123,7 +141,7 @@ pub fn depth_inside(models: &[&SweepModel], toolpath: &Toolpath, source: Source,
             }
         }
     };
-    g.depth_at(p)
+    Some(g)
 }
 
 /// Progress callback: `(vectors done, vectors in all)`; called between chunks.
@@ -400,7 +418,8 @@ impl Refiner<'_> {
 ///   about its centre segment (a cap's sphere), exact for a ball; the box is much tighter
 ///   along a vertical axis (a flat end mill's disk is `2R` wide but has no height);
 /// * for both surfaces, every feed move's whole cutter, puck and column
-///   ([`crate::column`]), for the vectors that start inside it: the box of the radius-`R` disks at its two ends' centres grown by
+///   ([`crate::column`]), whose column is entered exactly and whose puck is tested for the
+///   vector's start: the box of the radius-`R` disks at its two ends' centres grown by
 ///   `r` (the puck below), unbounded along every coordinate the axis climbs in (both ways
 ///   where the axis turns through it).
 struct Extras {
@@ -416,6 +435,9 @@ struct Extras {
 
 /// The model index that marks a column in [`Extras::items`].
 const COLUMN: u8 = u8::MAX;
+
+/// The model index that marks a move's puck in [`Extras::items`].
+const PUCK: u8 = u8::MAX - 1;
 
 /// Half-extents (mm) of a torus puck (major radius `a`, tube `r`) about the unit axis `k`,
 /// padded for rounding.
@@ -463,41 +485,100 @@ impl Extras {
     }
 
     /// The columns of every feed move of `toolpath` for the cutter of `models` (the same for
-    /// both sweeps: once).
-    fn columns(models: &[&SweepModel], toolpath: &Toolpath) -> Extras {
+    /// both sweeps: once), as far as they reach into `reach` (a box holding every vector):
+    /// items `(COLUMN, move, centre at its start, centre at its end)`. A column is cut off
+    /// at the length `L` along its axis beyond which it leaves `reach`; its box holds the
+    /// radius-`R` disks at the two centres and `L` up their axes. For a translation `L` is
+    /// the largest `(corner − c)·k` over the corners of `reach` and the two centres (linear
+    /// along the move); for a rotating move, where the axis point at length `L` runs on an
+    /// arc, the box grows by that arc's sagitta `(r + L)(1 − cos(θ/2))` (`θ` the turn), and
+    /// `L` is the farthest corner's distance from the start centre plus the move's length.
+    fn columns(models: &[&SweepModel], toolpath: &Toolpath, reach: (DVec3, DVec3)) -> Extras {
         let (mut items, mut bounds) = (Vec::new(), Vec::new());
-        if let Some(m) = models.first() {
-            let puck = Puck::of(m.cutter());
-            let rr = puck.a + puck.r;
-            let pad = 1e-9 * (1.0 + rr);
-            for (i, w) in toolpath.moves.windows(2).enumerate() {
-                let (a, b) = (w[0].pose, w[1].pose);
-                if w[1].kind == cam_core::MoveKind::Rapid || (a.tip == b.tip && a.axis == b.axis) {
-                    continue;
-                }
-                let (c0, c1) = (a.tip + puck.r * a.axis, b.tip + puck.r * b.axis);
-                // The column and the puck below it (down to the tip).
-                let (mut lo, mut hi) = if a.axis == b.axis {
-                    let e = puck_extent(puck.a, puck.r, a.axis, pad)
-                        .max(puck_extent(rr, 0.0, a.axis, pad));
-                    (c0.min(c1) - e, c0.max(c1) + e)
-                } else {
-                    // The centre runs on a slightly curved path: grow by the tube too.
-                    let e = DVec3::splat(rr + puck.r + pad);
-                    (c0.min(c1) - e, c0.max(c1) + e)
-                };
-                for k in [a.axis, b.axis] {
-                    for j in 0..3 {
-                        if k[j] > 1e-12 {
-                            hi[j] = f64::INFINITY;
-                        } else if k[j] < -1e-12 {
-                            lo[j] = f64::NEG_INFINITY;
-                        }
-                    }
-                }
-                items.push((COLUMN, (i + 1) as u32, c0, c1));
-                bounds.push((lo, hi));
+        let Some(m) = models.first().filter(|_| reach.0.cmple(reach.1).all()) else {
+            return Extras::from_items(items, bounds, 0.0);
+        };
+        let puck = Puck::of(m.cutter());
+        let rr = puck.a + puck.r;
+        let pad = 1e-9 * (1.0 + rr);
+        let corners: Vec<DVec3> = (0..8)
+            .map(|i| {
+                DVec3::new(
+                    if i & 1 == 0 { reach.0.x } else { reach.1.x },
+                    if i & 2 == 0 { reach.0.y } else { reach.1.y },
+                    if i & 4 == 0 { reach.0.z } else { reach.1.z },
+                )
+            })
+            .collect();
+        for (i, w) in toolpath.moves.windows(2).enumerate() {
+            let (a, b) = (w[0].pose, w[1].pose);
+            if w[1].kind == cam_core::MoveKind::Rapid || (a.tip == b.tip && a.axis == b.axis) {
+                continue;
             }
+            let (c0, c1) = (a.tip + puck.r * a.axis, b.tip + puck.r * b.axis);
+            let (lo, hi) = if a.axis == b.axis {
+                let k = a.axis;
+                let l = corners
+                    .iter()
+                    .map(|&q| (q - c0).dot(k).max((q - c1).dot(k)))
+                    .fold(0.0f64, f64::max);
+                let e = puck_extent(rr, 0.0, k, pad);
+                let (top0, top1) = (c0 + l * k, c1 + l * k);
+                (
+                    c0.min(c1).min(top0).min(top1) - e,
+                    c0.max(c1).max(top0).max(top1) + e,
+                )
+            } else {
+                let l = corners
+                    .iter()
+                    .map(|&q| q.distance(c0))
+                    .fold(0.0f64, f64::max)
+                    + c0.distance(c1)
+                    + puck.r;
+                let half = 0.5 * a.axis.angle_between(b.axis);
+                let sag = (puck.r + l) * (1.0 - half.cos());
+                let e = DVec3::splat(rr + sag + pad);
+                let (top0, top1) = (c0 + l * a.axis, c1 + l * b.axis);
+                (
+                    c0.min(c1).min(top0).min(top1) - e,
+                    c0.max(c1).max(top0).max(top1) + e,
+                )
+            };
+            // Wholly outside the vectors' reach: never entered.
+            if lo.cmpgt(reach.1).any() || hi.cmplt(reach.0).any() {
+                continue;
+            }
+            items.push((COLUMN, (i + 1) as u32, c0, c1));
+            bounds.push((lo, hi));
+        }
+        Extras::from_items(items, bounds, 0.0)
+    }
+
+    /// The pucks of every feed move, for cutters with a corner radius (a flat end mill's
+    /// puck is a disk, which holds no volume): items `(PUCK, move, centre at its start,
+    /// centre at its end)` boxed by the pucks at the two ends (translations) or by the
+    /// centres grown by `R + r` (rotating moves, whose centre runs on a slightly curved
+    /// path).
+    fn pucks(models: &[&SweepModel], toolpath: &Toolpath) -> Extras {
+        let (mut items, mut bounds) = (Vec::new(), Vec::new());
+        let Some(m) = models.first().filter(|m| m.cutter().corner_radius() > 0.0) else {
+            return Extras::from_items(items, bounds, 0.0);
+        };
+        let puck = Puck::of(m.cutter());
+        let pad = 1e-9 * (1.0 + puck.a + puck.r);
+        for (i, w) in toolpath.moves.windows(2).enumerate() {
+            let (a, b) = (w[0].pose, w[1].pose);
+            if w[1].kind == cam_core::MoveKind::Rapid || (a.tip == b.tip && a.axis == b.axis) {
+                continue;
+            }
+            let (c0, c1) = (a.tip + puck.r * a.axis, b.tip + puck.r * b.axis);
+            let e = if a.axis == b.axis {
+                puck_extent(puck.a, puck.r, a.axis, pad)
+            } else {
+                DVec3::splat(puck.a + 2.0 * puck.r + pad)
+            };
+            items.push((PUCK, (i + 1) as u32, c0, c1));
+            bounds.push((c0.min(c1) - e, c0.max(c1) + e));
         }
         Extras::from_items(items, bounds, 0.0)
     }
@@ -555,28 +636,33 @@ impl Extras {
             return;
         }
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
-        let mut stack = vec![0u32];
-        while let Some(ni) = stack.pop() {
+        // The tree is balanced (median splits): its depth is below 64.
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let ni = stack[top];
             let (a, b, first, count) = self.nodes[ni as usize];
             if !segment_box(line.o, inv, a, b, line.lo, hi) {
                 continue;
             }
             if count == 0 {
-                stack.push(first + 1);
-                stack.push(first);
+                stack[top] = first + 1;
+                stack[top + 1] = first;
+                top += 2;
                 continue;
             }
             for ci in first as usize..(first + count) as usize {
                 let (model, _, c0, c1) = self.items[ci];
                 let (bl, bh) = self.bounds[ci];
                 // Both bounds hold: the box (tight along a vertical axis), then the capsule
-                // (tight for a ball; a column has its box only).
+                // (tight for a ball; a column has its box only, and a move's puck is
+                // tested as tightly by its visitor).
                 if count > 1 && !segment_box(line.o, inv, bl, bh, line.lo, hi) {
                     continue;
                 }
                 let seg = Line { hi, ..*line };
-                if model != COLUMN
-                    && crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none()
+                if model < PUCK && crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none()
                 {
                     continue;
                 }
@@ -807,27 +893,76 @@ fn measure_vectors(
         puck,
     };
     let extras = exact.then(|| Extras::new(models));
-    // Both surface models: a gouge deeper than the vectors reach shows on neither's
-    // triangles.
-    let columns = Extras::columns(models, toolpath);
-    // The lowest-numbered move whose cutter holds both the vector's start and its vertex,
-    // if any: the vertex is gouged at least as deep as the vector reaches. (The vector
-    // starts inside the cutter and may cross none of the imprint surface's triangles, which
-    // hold its corner only.) The moves whose cutter holds the start are found by its point.
-    let deep_gouge = |line: &Line, tests: &mut usize| -> Option<u32> {
+    // Every vector lies in this box.
+    let reach = vectors.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), v| {
+            let (p, q) = (v.o + v.lo * v.n, v.o + v.hi * v.n);
+            (lo.min(p).min(q), hi.max(p).max(q))
+        },
+    );
+    let columns = Extras::columns(models, toolpath, reach);
+    let pucks = Extras::pucks(models, toolpath);
+    let rr = puck.a + puck.r;
+    // Both surface models: the imprint surface holds the cutter's corner only. The rest of
+    // the cutter is searched directly, move by move: its column (the cutter above its
+    // corner, which cuts a wall with its side and reaches deeper than the vectors do) is
+    // entered exactly, and a vector that starts inside a move's puck (which may cross none
+    // of its triangles) is entered at its start. The least entry below `hi` and its move,
+    // the lowest-numbered move on ties.
+    let cutter_entry = |line: &Line, hi: f64, tests: &mut usize| -> Option<(Entry, u32)> {
+        let mut found: Option<(Entry, u32)> = None;
+        let take = |e: Entry, mv: u32, found: &mut Option<(Entry, u32)>| {
+            if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
+                *found = Some((e, mv));
+            }
+        };
         let start = line.o + line.lo * line.n;
-        let mut found: Option<u32> = None;
-        columns.visit(line, line.lo, |ci, hi| {
-            let mv = columns.items[ci].1;
-            if found.is_none_or(|f| mv < f)
-                && let Some(g) = rf.feed_geometry(mv)
-                && g.cutter_holds(start)
-                && g.cutter_holds(line.o)
+        pucks.visit(line, line.lo, |ci, hi| {
+            let mv = pucks.items[ci].1;
+            // Held by a lower-numbered move already: the start is the least entry.
+            if found.is_some_and(|(_, fm)| mv >= fm) {
+                return hi;
+            }
+            *tests += 1;
+            if let Some(g) = rf.geometry(mv)
+                && g.puck_holds(start)
             {
-                *tests += 1;
-                found = Some(mv);
+                let e = Entry {
+                    s: line.lo,
+                    normal: -line.n,
+                };
+                take(e, mv, &mut found);
             }
             hi
+        });
+        // Entries through a column's bottom are the puck's (found above, or by the imprint
+        // surface): only sides and starts are searched. An entry less than `tie` below the
+        // best found does not replace it, so boxes that reach the best only by their padding
+        // (half that: the bottoms of the many moves over level ground where the best lies)
+        // are pruned whole.
+        let tie = 2e-9 * (1.0 + rr);
+        let hi = found.map_or(hi, |(e, _)| e.s) - tie;
+        columns.visit(line, hi, |ci, hi| {
+            let (_, mv, c0, c1) = columns.items[ci];
+            *tests += 1;
+            let (a, b) = (
+                toolpath.moves[mv as usize - 1].pose,
+                toolpath.moves[mv as usize].pose,
+            );
+            let seg = Line { hi, ..*line };
+            let e = if a.axis == b.axis {
+                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
+            } else {
+                rf.geometry(mv).and_then(|g| g.column_entry(&seg, false))
+            };
+            match e {
+                Some(e) => {
+                    take(e, mv, &mut found);
+                    hi.min(e.s - tie)
+                }
+                None => hi,
+            }
         });
         found
     };
@@ -867,12 +1002,15 @@ fn measure_vectors(
                 lo: v.lo,
                 hi: v.hi,
             };
-            if linear.is_none_or(|l| l.0 > v.lo)
-                && let Some(mv) = deep_gouge(&line, &mut stats[1])
+            let hi = linear.map_or(v.hi, |l| l.0);
+            if let Some((e, mv)) = cutter_entry(&line, hi, &mut stats[1])
+                && facing_ok(e.normal.dot(v.n))
+                && linear.is_none_or(|l| e.s < l.0)
             {
                 stats[0] = 1;
                 let src = Some(Source::Move(mv));
-                return (dev(Some(v.lo), Some(mv)), -1.0, Some(v.lo), src, stats);
+                let lin = linear.map(|l| l.0);
+                return (dev(Some(e.s), Some(mv)), e.normal.dot(v.n), lin, src, stats);
             }
             return match linear {
                 Some((s, mv, fc)) => (dev(Some(s), Some(mv)), fc, Some(s), low_src, stats),
@@ -1035,14 +1173,9 @@ fn measure_vectors(
                 best.map_or(hi, |b| b.0.s.min(hi))
             });
         }
-        // A gouge deeper than the vector reaches (see `deep_gouge`).
-        if best.is_none_or(|b| b.0.s > v.lo)
-            && let Some(mv) = deep_gouge(&line, &mut stats[1])
-        {
-            let e = Entry {
-                s: line.lo,
-                normal: -line.n,
-            };
+        // The rest of the cutter (see `cutter_entry`).
+        let hi = best.map_or(v.hi, |b| b.0.s);
+        if let Some((e, mv)) = cutter_entry(&line, hi, &mut stats[1]) {
             better(e, mv, (COLUMN, mv as u64), Source::Move(mv), &mut best);
         }
         match (best, linear) {
@@ -1083,6 +1216,11 @@ fn measure_vectors(
             p(per.len(), vectors.len());
         }
     }
+    let from_start = per
+        .iter()
+        .zip(&vectors)
+        .map(|(p, v)| p.0.signed_mm == Some(v.lo))
+        .collect();
     let mut stats = MeasureStats::default();
     let mut deviations = Vec::with_capacity(per.len());
     let mut facings = Vec::with_capacity(per.len());
@@ -1104,6 +1242,7 @@ fn measure_vectors(
         facing: facings,
         linear_mm,
         source,
+        from_start,
         stats,
     }
 }

@@ -191,6 +191,7 @@ fn clip_to_material(
         m.facing[i] = again.facing[k];
         m.linear_mm[i] = again.linear_mm[k];
         m.source[i] = again.source[k];
+        m.from_start[i] = again.from_start[k];
     }
     Ok(inner)
 }
@@ -203,10 +204,15 @@ const CREASE_DEG: f64 = 10.0;
 /// inside the swept volume. There the vector runs along the averaged normal (roughly the
 /// bisector), not normal to either face, and its distance to the crossing overstates the
 /// depth (at a 90° edge by up to 1/cos 45°). On the exact surface the depth is the vertex's
-/// depth inside the volume swept by the move that cut it ([`measure::depth_inside`]); on
-/// the linear surface, its distance to the crossed triangle's plane, `|t · (n_s · d)|` (the
-/// depth to first order, `facing[i] = n_s · d`). Smooth vertices keep the paper's distance
-/// along the normal.
+/// depth inside the puck swept by the move that cut it ([`measure::depth_inside`], exact);
+/// where the vertex lies outside that puck, and on the linear surface, its distance to the
+/// plane tangent to the swept surface at the entry, `|t · (n_s · d)|` (`facing[i] = n_s · d`;
+/// on the exact surface a supporting plane of the move's convex volume, so an upper bound of
+/// the depth in it). A vector read at its start (the vertex gouged at least as deep as the
+/// vector reaches, where that plane means nothing) reads the vertex's depth inside the
+/// move's whole cutter, puck or column ([`measure::cutter_depth_inside`]; in the column the
+/// largest depth over the move's poses, a lower bound). Smooth vertices keep the paper's
+/// distance along the normal.
 ///
 /// The rim of an open mesh is treated the same way: there the surface simply ends, a tool
 /// passing beyond it reaches under the rim from outside, and the distance along the normal
@@ -264,6 +270,12 @@ fn crease_depths(
         }
         let first_order = s * m.facing[i].abs().min(1.0);
         let depth = match (exact, m.source[i]) {
+            // Read at its start, the vector says only "at least this deep"; with the
+            // material side unknown it says nothing: the vertex's depth inside the whole
+            // cutter, the column included (there a lower bound).
+            (Some((models, path)), Some(src)) if m.from_start[i] || unoriented[i] => {
+                measure::cutter_depth_inside(models, path, src, refined.positions[i])
+            }
             (Some((models, path)), Some(src)) => {
                 measure::depth_inside(models, path, src, refined.positions[i])
             }

@@ -208,7 +208,8 @@ fn verify_gouging(
 /// move along the tool axis has no front half, both halves of its wall cut. (The verifier
 /// used to model one half only, and passed this program on one side with no finding.) The
 /// cutter above its corner also cuts the wall's top edge, from the plunge's bottom up
-/// through the top face: gouged deeper than the vectors reach (1 mm).
+/// through the top face; the top face's vertices over the notch lie next to the wall, where
+/// the reading is their depth inside the cutter (its side is at most 0.2 mm away).
 #[test]
 fn plunge_into_a_wall_is_a_gouge_on_either_side() {
     let d = tempfile::tempdir().unwrap();
@@ -221,7 +222,7 @@ fn plunge_into_a_wall_is_a_gouge_on_either_side() {
         );
         let j = verify_gouging(&ngc, &part, "flat:6", "exact");
         let g = j["max_gouge_mm"].as_f64().unwrap();
-        assert!((g - 1.0).abs() < 1e-9, "{name}: max gouge {g}");
+        assert!((g - 0.2).abs() < 1e-9, "{name}: max gouge {g}");
         let worst = j["worst_gouges"].as_array().unwrap();
         assert!(
             worst.iter().all(|w| w["line"] == 5),
@@ -267,5 +268,91 @@ fn slot_deeper_than_the_vectors_reach_is_a_gouge() {
             .filter(|w| (w["position"][2].as_f64().unwrap() - 5.0).abs() < 1e-9)
             .count();
         assert!(top > 0, "{tool}: no gouge on the top face: {j}");
+    }
+}
+
+/// The vertices of a `--deviation` PLY: position and signed deviation (mm, NaN where
+/// nothing was measured).
+fn ply_deviations(path: &std::path::Path) -> Vec<([f32; 3], f32)> {
+    let bytes = std::fs::read(path).unwrap();
+    let end = b"end_header\n";
+    let body = bytes.windows(end.len()).position(|w| w == end).unwrap() + end.len();
+    let header = std::str::from_utf8(&bytes[..body]).unwrap();
+    let n: usize = header
+        .lines()
+        .find_map(|l| l.strip_prefix("element vertex "))
+        .unwrap()
+        .parse()
+        .unwrap();
+    // x y z nx ny nz (f32), red green blue (u8), deviation (f32).
+    let f = |at: usize| f32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
+    (0..n)
+        .map(|i| {
+            let at = body + i * 31;
+            ([f(at), f(at + 4), f(at + 8)], f(at + 27))
+        })
+        .collect()
+}
+
+/// A cutter running beside a wall, 0.5 mm above the floor, with its side 0.1 mm into the
+/// wall: every wall vertex along the straight run reads the cutter's outline at its
+/// height, `a + sqrt(r² − (r − h)²)` below the torus centre and `R` above it, so the wall
+/// is gouged 0.1 mm up to its top wherever the cutter above its corner is. (The verifier
+/// imprinted the corner only: with a flat end mill it read nothing on the wall, max gouge
+/// 0.0, and exited 0.)
+#[test]
+fn a_wall_cut_by_the_side_above_the_corner_is_a_gouge() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "box.obj", &box_obj(0.0, 10.0));
+    let ngc = write(
+        d.path(),
+        "side.ngc",
+        "G21 G90 G17\nG0 Z10\nG0 X-10 Y3\nG0 Z0.5\nG1 X-2.9 F500\nG1 Y7\nG1 X-10\nG0 Z10\nM30\n",
+    );
+    for (tool, a, r) in [
+        ("flat:6", 3.0, 0.0),
+        ("bull:6:1.5", 1.5, 1.5),
+        ("ball:6", 0.0, 3.0),
+    ] {
+        let ply = d.path().join("dev.ply");
+        let o = cam(&[
+            "verify",
+            ngc.to_str().unwrap(),
+            "--part",
+            part.to_str().unwrap(),
+            "--tool",
+            tool,
+            "--json",
+            "--deviation",
+            ply.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let g = j["max_gouge_mm"].as_f64().unwrap();
+        assert!((g - 0.1).abs() < 1e-9, "{tool}: max gouge {g}");
+        let (mut wall, mut gouged) = (0, 0);
+        for ([x, y, z], dev) in ply_deviations(&ply) {
+            // The wall along the straight run, off its edges (creases).
+            if x != 0.0 || !(3.0..=7.0).contains(&y) || !(0.6..=4.9).contains(&z) {
+                continue;
+            }
+            let h = f64::from(z) - 0.5;
+            let outline = if h >= r {
+                a + r
+            } else {
+                a + (r * r - (r - h) * (r - h)).sqrt()
+            };
+            let want = 2.9 - outline;
+            assert!(
+                (f64::from(dev) - want).abs() < 1e-5,
+                "{tool}: wall at y {y} z {z} reads {dev}, the outline gives {want}"
+            );
+            wall += 1;
+            gouged += usize::from(want < 0.0);
+        }
+        assert!(
+            wall > 100 && gouged > 50,
+            "{tool}: {wall} wall vertices, {gouged} gouged"
+        );
     }
 }

@@ -356,7 +356,9 @@ fn bull_translation_matches_instances_on_any_move() {
     assert!(worst < 0.05, "brute force off by {worst} mm");
 }
 
-/// Brute force: the least entry over many column instances along the move.
+/// Brute force: the least entry over many column instances along the move, and whether
+/// that instance is entered other than through its base or next to it (its side more than
+/// two instances' spacing above the base, or the line's start).
 fn brute_column(
     line: &Line,
     c0: DVec3,
@@ -364,22 +366,30 @@ fn brute_column(
     k: DVec3,
     r: f64,
     samples: usize,
-) -> Option<f64> {
+) -> Option<(f64, bool)> {
+    let above = 2.0 * (c1 - c0).length() / samples as f64;
     (0..=samples)
         .filter_map(|i| {
-            let u = i as f64 / samples as f64;
-            column_entry(line, c0 + u * (c1 - c0), k, r).map(|e| e.s)
+            let c = c0 + (i as f64 / samples as f64) * (c1 - c0);
+            column_entry(line, c, k, r, true).map(|e| {
+                let h = (line.o + e.s * line.n - c).dot(k);
+                (e.s, e.s == line.lo || (e.normal != -k && h > above))
+            })
         })
-        .fold(None, |b: Option<f64>, s| Some(b.map_or(s, |b| b.min(s))))
+        .fold(None, |b: Option<(f64, bool)>, x| {
+            Some(b.map_or(x, |b| if x.0 < b.0 { x } else { b }))
+        })
 }
 
 /// The closed form equals the least entry over dense column instances (which lies at
 /// most the instances' spacing above it, and never below), for random lines and moves:
-/// climbing, level and axial, vertical and tilted axes.
+/// climbing, level and axial, vertical and tilted axes. Without the bottom's candidates
+/// (`base` false) it is a point of the union at or after the full entry, and no later
+/// than the instances' where their least is entered through its side.
 #[test]
 fn column_translation_matches_instances() {
     let mut g = Lcg(7);
-    let mut compared = 0;
+    let (mut compared, mut sides, mut side_exact) = (0, 0, 0);
     for case in 0..3000 {
         let k = if case % 3 == 0 { DVec3::Z } else { g.unit() };
         let r = g.range(0.5, 4.0);
@@ -410,8 +420,10 @@ fn column_translation_matches_instances() {
             hi: 16.0,
         };
         let samples = 4000;
-        let exact = column_translation_entry(&line, c0, c1, k, r);
-        let b = brute_column(&line, c0, c1, k, r, samples);
+        let exact = column_translation_entry(&line, c0, c1, k, r, true);
+        let side = column_translation_entry(&line, c0, c1, k, r, false);
+        let brute = brute_column(&line, c0, c1, k, r, samples);
+        let b = brute.map(|b| b.0);
         // x is in the union up to the instances' spacing.
         let tol = d.length() / samples as f64 + 1e-9;
         let inside = |x: DVec3| {
@@ -444,6 +456,38 @@ fn column_translation_matches_instances() {
             }
             (None, Some(b)) => panic!("case {case}: missed an entry at {b}"),
         }
+        match (side, exact, brute) {
+            (None, _, Some((b, true))) => panic!("case {case}: missed a side entry at {b}"),
+            (None, _, _) => {}
+            (Some(_), None, _) => panic!("case {case}: a side entry without an entry"),
+            (Some(es), Some(e), brute) => {
+                sides += 1;
+                assert!(
+                    es.s >= e.s - 1e-12,
+                    "case {case}: side {} before {}",
+                    es.s,
+                    e.s
+                );
+                assert!(
+                    inside(line.o + es.s * line.n),
+                    "case {case}: side {} outside",
+                    es.s
+                );
+                assert!(es.normal.dot(line.n) < 0.0, "case {case}: side normal");
+                if let Some((b, true)) = brute {
+                    side_exact += 1;
+                    assert!(
+                        es.s <= b + 1e-9,
+                        "case {case}: side {} above instances {b}",
+                        es.s
+                    );
+                }
+            }
+        }
     }
     assert!(compared > 2000, "{compared}");
+    assert!(
+        side_exact > 1000 && sides > side_exact,
+        "{sides} {side_exact}"
+    );
 }
