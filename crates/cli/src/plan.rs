@@ -440,6 +440,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             "mean_mm": v.report.mean_mm, "p95_mm": v.report.p95_mm, "points": v.report.measured,
             "unmachined": v.report.unmachined, "within_tolerance": v.report.tolerance_counts.within,
             "worst_gouge": v.report.worst_gouges.first(), "timings": v.timings,
+            "rapids": v.rapids,
         })),
     });
     if a.json {
@@ -478,7 +479,11 @@ pub fn run(a: PlanArgs) -> Result<()> {
         );
         if let Some(v) = &verification {
             eprintln!("cam {}", crate::verify::summary_line(v, a.tolerance));
-            if let Some(w) = crate::verify::topology_warning(v) {
+            let warnings = [
+                crate::verify::topology_warning(v),
+                crate::verify::rapids_warning(v),
+            ];
+            for w in warnings.into_iter().flatten() {
                 eprintln!("cam plan: {w}");
             }
         }

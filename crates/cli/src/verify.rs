@@ -111,11 +111,15 @@ pub fn run(a: VerifyArgs) -> Result<()> {
     report["part"] = serde_json::json!(a.part);
     report["tool"] = serde_json::json!(cutter.to_string());
     report["timings"] = serde_json::to_value(v.timings)?;
+    report["rapids"] = serde_json::to_value(&v.rapids)?;
     if a.json {
         println!("{report}");
     } else {
         eprintln!("cam {}", summary_line(&v, a.tolerance));
-        if let Some(w) = topology_warning(&v) {
+        for w in [topology_warning(&v), rapids_warning(&v)]
+            .into_iter()
+            .flatten()
+        {
             eprintln!("cam verify: {w}");
         }
     }
@@ -224,10 +228,21 @@ pub fn summary_line(v: &Verification, tol: f64) -> String {
             w.line.map_or(String::new(), |l| format!(", line {l}"))
         )
     });
+    let rp = &v.rapids;
+    let rapids = if rp.collisions.is_empty() {
+        format!("{} rapids clear of the part", rp.checked)
+    } else {
+        format!(
+            "{} of {} rapids run into the part (up to {:.4} mm)",
+            rp.collisions.len(),
+            rp.checked,
+            rp.max_depth_mm
+        )
+    };
     format!(
         "verify: max gouge {:.4} mm{worst}, max excess {:.4} mm, {} of {} measured points within \
          ±{tol} mm; {} points beyond the cutter's reach (over {} mm of material, or faces the \
-         path never approaches such as a part's sides and bottom); {:.1} s",
+         path never approaches such as a part's sides and bottom); {rapids}; {:.1} s",
         r.max_gouge_mm,
         r.max_excess_mm,
         r.tolerance_counts.within,
@@ -236,12 +251,46 @@ pub fn summary_line(v: &Verification, tol: f64) -> String {
         r.settings
             .as_ref()
             .map_or(f64::NAN, |s| s.deviation.outside_mm),
-        v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s
+        v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s + v.timings.rapids_s
     )
 }
 
-/// Exit 1 when a gouge exceeds the tolerance.
+/// A warning when some rapids could not be checked (the axis off +Z: 5-axis repositioning).
+pub fn rapids_warning(v: &Verification) -> Option<String> {
+    (v.rapids.unchecked > 0).then(|| {
+        format!(
+            "warning: {} rapids with the tool axis off +Z were not checked against the part",
+            v.rapids.unchecked
+        )
+    })
+}
+
+/// Exit 1 when a gouge exceeds the tolerance or a rapid runs into the part deeper than it.
 pub fn verdict(v: &Verification, tol: f64) -> Result<()> {
+    if let Some(c) = v
+        .rapids
+        .collisions
+        .iter()
+        .max_by(|p, q| p.depth_mm.total_cmp(&q.depth_mm))
+    {
+        let n = v.rapids.collisions.len();
+        return Err(Findings(format!(
+            "{} into the part; the deepest, {:.4} mm below where the tool would rest on it, at \
+             ({:.3}, {:.3}, {:.3}){}",
+            if n == 1 {
+                "a rapid move runs".to_string()
+            } else {
+                format!("{n} rapid moves run")
+            },
+            c.depth_mm,
+            c.tip[0],
+            c.tip[1],
+            c.tip[2],
+            c.line
+                .map_or(String::new(), |l| format!(", toolpath line {l}"))
+        ))
+        .into());
+    }
     if v.report.gouge_exceeds(tol) {
         let w = v.report.worst_gouges.first();
         return Err(Findings(format!(

@@ -12,6 +12,7 @@ use crate::deviation::{Deviation, DeviationConfig, DeviationError, TriangleBvh};
 use crate::material;
 use crate::measure::{self, MeasureStats, SurfaceModel};
 use crate::model::SweepModel;
+use crate::rapids;
 use crate::refine::{self, RefineConfig, RefineError, RefinedMesh};
 use crate::report::{self, MeasureSettings, ReportConfig, VerifyReport};
 use crate::sweep::{SweepConfig, SweptSurface};
@@ -96,6 +97,8 @@ pub struct Timings {
     pub refine_s: f64,
     /// Growing and cutting the vectors.
     pub measure_s: f64,
+    /// Checking the rapids against the part.
+    pub rapids_s: f64,
 }
 
 /// A finished verification.
@@ -120,6 +123,9 @@ pub struct Verification {
     /// The inner lengths of the vectors of gouges deeper than the tolerance, clipped to the
     /// material (see [`material`]; only those are checked).
     pub inner: material::InnerLengths,
+    /// The rapids checked against the part ([`rapids`]): those that run into it deeper than
+    /// the tolerance fail the check like a gouge.
+    pub rapids: rapids::RapidReport,
 }
 
 impl Verification {
@@ -548,6 +554,9 @@ pub fn verify_with_progress(
         extra,
     };
     let report = report::build_report(&devs, &lines, &ReportConfig::new(tol), Some(settings));
+    let t = Instant::now();
+    let rapids = rapids::check_rapids(part, cutter, toolpath, tol);
+    timings.rapids_s = t.elapsed().as_secs_f64();
     Ok(Verification {
         report,
         refined,
@@ -557,5 +566,6 @@ pub fn verify_with_progress(
         timings,
         topology,
         inner,
+        rapids,
     })
 }

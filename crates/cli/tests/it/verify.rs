@@ -356,3 +356,46 @@ fn a_wall_cut_by_the_side_above_the_corner_is_a_gouge() {
         );
     }
 }
+
+/// A rapid (G0) through the part is a crash: `cam verify` names its line and depth and
+/// exits 1, though it removes no material in the deviation measurement. (It passed such a
+/// program with max gouge 0.0 and exit 0.)
+#[test]
+fn a_rapid_through_the_part_fails_the_check() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "box.obj", &box_obj(0.0, 10.0));
+    let ngc = write(
+        d.path(),
+        "rapid.ngc",
+        "G21 G90 G17\nG0 Z10\nG0 X-5 Y5\nG0 Z3\nG0 X15\nG0 Z10\nG0 X-5 Y-5\nG1 Z5 F100\n\
+         G1 X15 F500\nG0 Z10\nM30\n",
+    );
+    for tool in ["flat:6", "ball:6"] {
+        let o = cam(&[
+            "verify",
+            ngc.to_str().unwrap(),
+            "--part",
+            part.to_str().unwrap(),
+            "--tool",
+            tool,
+            "--json",
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
+        assert!(stderr(&o).contains("line 5"), "{tool}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(
+            j["max_gouge_mm"].as_f64(),
+            Some(0.0),
+            "{tool}: the feed moves are clean"
+        );
+        let r = &j["rapids"];
+        assert_eq!(r["checked"], 5, "{tool}: {r}");
+        let c = r["collisions"].as_array().unwrap();
+        assert_eq!(c.len(), 1, "{tool}: {r}");
+        assert_eq!(c[0]["line"], 5, "{tool}: {r}");
+        assert!(
+            (c[0]["depth_mm"].as_f64().unwrap() - 2.0).abs() < 1e-9,
+            "{tool}: {r}"
+        );
+    }
+}

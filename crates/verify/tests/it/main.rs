@@ -6,6 +6,7 @@ mod five_axis;
 mod imprint;
 mod measure;
 mod pipeline;
+mod rapids;
 mod refine;
 mod report;
 mod sweep;

@@ -9,7 +9,7 @@ fn block() -> Mesh {
 }
 
 /// A box x ∈ [x0, x1], y ∈ [-10, 10], z ∈ [-10, 0] (closed, outward winding).
-fn box_mesh(x0: f64, x1: f64) -> Mesh {
+pub(crate) fn box_mesh(x0: f64, x1: f64) -> Mesh {
     let (y0, y1, z0, z1) = (-10.0, 10.0, -10.0, 0.0);
     let p = |x, y, z| DVec3::new(x, y, z);
     let quad =

@@ -1,0 +1,156 @@
+//! Rapid moves checked against the part (`cam_verify::rapids`): a rapid that runs into the
+//! part sinks below the CL surface, by a depth known in closed form on a block and checked
+//! against dense drops on the dome.
+
+use cam_core::{Cutter, DVec3, Mesh, Move, MoveKind, Pose, Toolpath, Units};
+use cam_offset::DropCutter;
+use cam_verify::rapids::{RapidReport, check_rapids};
+
+use crate::pipeline::box_mesh;
+
+fn mv(kind: MoveKind, tip: DVec3, axis: DVec3) -> Move {
+    Move {
+        kind,
+        pose: Pose { tip, axis },
+        feed_mm_per_min: None,
+        line: None,
+        pass: None,
+    }
+}
+
+/// One rapid from `a` to `b` (axis +Z).
+fn rapid(a: DVec3, b: DVec3) -> Toolpath {
+    Toolpath {
+        moves: vec![
+            mv(MoveKind::Rapid, a, DVec3::Z),
+            mv(MoveKind::Rapid, b, DVec3::Z),
+        ],
+    }
+}
+
+fn check(part: &Mesh, spec: &str, a: DVec3, b: DVec3) -> RapidReport {
+    let cutter: Cutter = spec.parse().unwrap();
+    check_rapids(part, &cutter, &rapid(a, b), 0.01)
+}
+
+/// The block x ∈ [0, 20], y ∈ [−10, 10], top at z = 0: through it, over it, along its wall
+/// with the side of the tool in it, and straight down into it.
+#[test]
+fn rapids_into_a_block_read_their_depth_below_the_cl_surface() {
+    let part = box_mesh(0.0, 20.0);
+    let p = DVec3::new;
+    for (spec, a, r) in [
+        ("flat:6", 3.0f64, 0.0f64),
+        ("ball:6", 0.0, 3.0),
+        ("bull:6:1.5", 1.5, 1.5),
+    ] {
+        // Across the middle, 2 mm below the top: the tool would rest on the top face.
+        let rep = check(&part, spec, p(-10.0, 0.0, -2.0), p(30.0, 0.0, -2.0));
+        assert_eq!(rep.checked, 1, "{spec}");
+        let c = &rep.collisions[..];
+        assert!(
+            c.len() == 1 && (c[0].depth_mm - 2.0).abs() < 1e-9,
+            "{spec}: {rep:?}"
+        );
+        assert!(
+            (c[0].tip[2] + 2.0).abs() < 1e-12 && c[0].move_index == 1,
+            "{spec}"
+        );
+        // Along the wall x = 0 with the axis 2.9 mm from it, 5 mm down: the tool would rest
+        // on the top edge, where its outline at radius 2.9 lies `a + r − …` above the tip.
+        let h = if 2.9 <= a {
+            0.0
+        } else {
+            r - (r * r - (2.9 - a) * (2.9 - a)).sqrt()
+        };
+        let rep = check(&part, spec, p(-2.9, -30.0, -5.0), p(-2.9, 30.0, -5.0));
+        let want = 5.0 - h;
+        assert!(
+            (rep.max_depth_mm - want).abs() < 1e-9 && rep.collisions.len() == 1,
+            "{spec}: beside the wall {} (want {want})",
+            rep.max_depth_mm
+        );
+        // Just over the top: clear; just under it by less than the tolerance: no collision,
+        // but the depth is read.
+        let rep = check(&part, spec, p(-10.0, 0.0, 0.005), p(30.0, 0.0, 0.005));
+        assert!(
+            rep.collisions.is_empty() && rep.max_depth_mm == 0.0,
+            "{spec}: {rep:?}"
+        );
+        let rep = check(&part, spec, p(-10.0, 0.0, -0.005), p(30.0, 0.0, -0.005));
+        assert!(rep.collisions.is_empty(), "{spec}: {rep:?}");
+        assert!((rep.max_depth_mm - 0.005).abs() < 1e-9, "{spec}: {rep:?}");
+        // Straight down into the top.
+        let rep = check(&part, spec, p(10.0, 0.0, 10.0), p(10.0, 0.0, -1.0));
+        assert!((rep.max_depth_mm - 1.0).abs() < 1e-9, "{spec}: {rep:?}");
+        assert_eq!(rep.collisions[0].tip, [10.0, 0.0, -1.0], "{spec}");
+        // Far from the block: nothing.
+        let rep = check(&part, spec, p(-10.0, 0.0, -9.0), p(-10.0, 30.0, -9.0));
+        assert!(
+            rep.collisions.is_empty() && rep.max_depth_mm == 0.0,
+            "{spec}"
+        );
+    }
+}
+
+/// Rapids across the dome at heights that cut it: the depth reported is reached at the
+/// point reported (a drop there confirms it), and no drop among 4000 along the rapid finds
+/// the tool deeper.
+#[test]
+fn rapids_over_the_dome_agree_with_dense_drops() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/parts");
+    let part = Mesh::load(root.join("dome.obj"), Units::Mm).unwrap();
+    for spec in ["ball:6", "bull:6:1.5", "flat:6"] {
+        let cutter: Cutter = spec.parse().unwrap();
+        let dc = DropCutter::new(&part, cutter);
+        for (a, b) in [
+            (DVec3::new(-35.0, -3.0, 12.0), DVec3::new(35.0, 4.0, 16.0)),
+            (DVec3::new(-10.0, -30.0, 2.0), DVec3::new(12.0, 30.0, 19.0)),
+            (DVec3::new(30.0, 30.0, 8.0), DVec3::new(-30.0, -25.0, 8.0)),
+        ] {
+            let rep = check_rapids(&part, &cutter, &rapid(a, b), 0.01);
+            let c = rep.collisions.first().expect("the rapid cuts the dome");
+            let t = DVec3::from_array(c.tip);
+            let z = dc.drop(t.x, t.y).unwrap();
+            assert!(
+                (z - t.z - c.depth_mm).abs() < 1e-9,
+                "{spec}: depth {} not reached at {t:?} (drop {z})",
+                c.depth_mm
+            );
+            let n = 4000;
+            let dense = (0..=n)
+                .filter_map(|i| {
+                    let p = a.lerp(b, i as f64 / n as f64);
+                    dc.drop(p.x, p.y).map(|z| z - p.z)
+                })
+                .fold(f64::NEG_INFINITY, f64::max);
+            assert!(
+                c.depth_mm >= dense - 1e-9,
+                "{spec}: {} below a drop's {dense}",
+                c.depth_mm
+            );
+            assert!(
+                c.depth_mm - dense < 0.01,
+                "{spec}: {} vs {dense}",
+                c.depth_mm
+            );
+        }
+    }
+}
+
+/// A rapid that turns the axis (5-axis repositioning) is not checked, and says so.
+#[test]
+fn tilted_rapids_are_counted_unchecked() {
+    let part = box_mesh(0.0, 20.0);
+    let cutter: Cutter = "ball:6".parse().unwrap();
+    let k = DVec3::new(0.0, 0.3, 1.0).normalize();
+    let tp = Toolpath {
+        moves: vec![
+            mv(MoveKind::Rapid, DVec3::new(-10.0, 0.0, -2.0), DVec3::Z),
+            mv(MoveKind::Rapid, DVec3::new(30.0, 0.0, -2.0), k),
+        ],
+    };
+    let rep = check_rapids(&part, &cutter, &tp, 0.01);
+    assert_eq!((rep.checked, rep.unchecked), (0, 1));
+    assert!(rep.collisions.is_empty());
+}
