@@ -38,7 +38,8 @@ pub struct RapidCollision {
 /// The rapids checked and those that run into the part.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct RapidReport {
-    /// Rapids checked (axis +Z at both ends, and moving).
+    /// Rapids checked (axis +Z at both ends, and moving; a first move that is a rapid is
+    /// checked at the pose it reaches).
     pub checked: usize,
     /// Rapids not checked: the axis is off +Z at an end.
     pub unchecked: usize,
@@ -57,16 +58,20 @@ pub fn check_rapids(
     toolpath: &Toolpath,
     tolerance_mm: f64,
 ) -> RapidReport {
-    let rapids: Vec<usize> = (1..toolpath.moves.len())
+    // The pose a rapid starts from: the previous move's; the first move starts where it
+    // ends (a program's first rapid comes from where the tool was, which it does not say:
+    // the pose it reaches is checked).
+    let start = |i: usize| toolpath.moves[i.saturating_sub(1)].pose;
+    let rapids: Vec<usize> = (0..toolpath.moves.len())
         .filter(|&i| {
-            let (a, b) = (&toolpath.moves[i - 1].pose, &toolpath.moves[i].pose);
-            toolpath.moves[i].kind == MoveKind::Rapid && a.tip != b.tip
+            toolpath.moves[i].kind == MoveKind::Rapid
+                && (i == 0 || start(i).tip != toolpath.moves[i].pose.tip)
         })
         .collect();
     let vertical = |k: DVec3| (k - DVec3::Z).length() <= 1e-12;
-    let (checked, unchecked): (Vec<usize>, Vec<usize>) = rapids.into_iter().partition(|&i| {
-        vertical(toolpath.moves[i - 1].pose.axis) && vertical(toolpath.moves[i].pose.axis)
-    });
+    let (checked, unchecked): (Vec<usize>, Vec<usize>) = rapids
+        .into_iter()
+        .partition(|&i| vertical(start(i).axis) && vertical(toolpath.moves[i].pose.axis));
     if checked.is_empty() {
         return RapidReport {
             unchecked: unchecked.len(),
@@ -77,7 +82,7 @@ pub fn check_rapids(
     let depths: Vec<(f64, DVec3)> = checked
         .par_iter()
         .map(|&i| {
-            let (a, b) = (toolpath.moves[i - 1].pose.tip, toolpath.moves[i].pose.tip);
+            let (a, b) = (start(i).tip, toolpath.moves[i].pose.tip);
             if a.x == b.x && a.y == b.y {
                 let low = if a.z <= b.z { a } else { b };
                 let depth = dc.drop(a.x, a.y).map_or(0.0, |z| (z - low.z).max(0.0));

@@ -46,7 +46,8 @@ fn rapids_into_a_block_read_their_depth_below_the_cl_surface() {
     ] {
         // Across the middle, 2 mm below the top: the tool would rest on the top face.
         let rep = check(&part, spec, p(-10.0, 0.0, -2.0), p(30.0, 0.0, -2.0));
-        assert_eq!(rep.checked, 1, "{spec}");
+        // (The path's first move, a rapid to the start, is checked where it arrives.)
+        assert_eq!(rep.checked, 2, "{spec}");
         let c = &rep.collisions[..];
         assert!(
             c.len() == 1 && (c[0].depth_mm - 2.0).abs() < 1e-9,
@@ -138,6 +139,26 @@ fn rapids_over_the_dome_agree_with_dense_drops() {
     }
 }
 
+/// A program's first move, when it is a rapid, comes from where the tool was (the program
+/// does not say): the pose it reaches is checked.
+#[test]
+fn a_first_rapid_is_checked_where_it_arrives() {
+    let part = box_mesh(0.0, 20.0);
+    let cutter: Cutter = "flat:6".parse().unwrap();
+    for (z, depth) in [(-1.5, 1.5), (0.5, 0.0)] {
+        let tp = Toolpath {
+            moves: vec![
+                mv(MoveKind::Rapid, DVec3::new(10.0, 0.0, z), DVec3::Z),
+                mv(MoveKind::Cut, DVec3::new(12.0, 0.0, 1.0), DVec3::Z),
+            ],
+        };
+        let rep = check_rapids(&part, &cutter, &tp, 0.01);
+        assert_eq!(rep.checked, 1);
+        assert!((rep.max_depth_mm - depth).abs() < 1e-12, "{rep:?}");
+        assert_eq!(rep.collisions.len(), usize::from(depth > 0.0));
+    }
+}
+
 /// A rapid that turns the axis (5-axis repositioning) is not checked, and says so.
 #[test]
 fn tilted_rapids_are_counted_unchecked() {
@@ -151,6 +172,7 @@ fn tilted_rapids_are_counted_unchecked() {
         ],
     };
     let rep = check_rapids(&part, &cutter, &tp, 0.01);
-    assert_eq!((rep.checked, rep.unchecked), (0, 1));
+    // (The first move is checked where it arrives, beside the block.)
+    assert_eq!((rep.checked, rep.unchecked), (1, 1));
     assert!(rep.collisions.is_empty());
 }
