@@ -937,10 +937,15 @@ fn measure_vectors(
             hi
         });
         // Entries through a column's bottom are the puck's (found above, or by the imprint
-        // surface): only sides and starts are searched. An entry less than `tie` below the
-        // best found does not replace it, so boxes that reach the best only by their padding
-        // (half that: the bottoms of the many moves over level ground where the best lies)
-        // are pruned whole.
+        // surface): only sides and starts are searched, except for a flat end mill, whose
+        // column's bottom is its whole lower surface: searched here too, every move exactly,
+        // its readings do not depend on the imprint surface's triangles (a line through a
+        // vertex that the bottom of a level pass holds exactly, the tool resting at the
+        // vertex's height, met the imprint of the pass before's edge and not its own). An
+        // entry less than `tie` below the best found does not replace it, so boxes that reach
+        // the best only by their padding (half that: the bottoms of the many moves over level
+        // ground where the best lies) are pruned whole.
+        let flat = puck.r == 0.0;
         let tie = 2e-9 * (1.0 + rr);
         let hi = found.map_or(hi, |(e, _)| e.s) - tie;
         columns.visit(line, hi, |ci, hi| {
@@ -952,9 +957,9 @@ fn measure_vectors(
             );
             let seg = Line { hi, ..*line };
             let e = if a.axis == b.axis {
-                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
+                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, flat)
             } else {
-                rf.geometry(mv).and_then(|g| g.column_entry(&seg, false))
+                rf.geometry(mv).and_then(|g| g.column_entry(&seg, flat))
             };
             match e {
                 Some(e) => {

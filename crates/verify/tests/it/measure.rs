@@ -443,3 +443,44 @@ fn exact_entries_equal_brute_force_over_every_move() {
         }
     }
 }
+
+/// A flat end mill's level passes at the height of a vertex on a part's edge (the tool
+/// resting on the face the vertex bounds): the vertex is on the bottom of the second pass,
+/// and its vector, along the edge's averaged normal, reads 0. (On the imprint surface the
+/// line met the first pass's edge, whose exact volume it only grazes, and not the second
+/// pass's own triangles; it read the side of the link beyond, 1.39 mm away. Found on
+/// ocl_sphere_on_plate's planned program, whose moves these are.)
+#[test]
+fn a_flat_bottom_through_the_vertex_reads_zero() {
+    let mv = |kind, x: f64, y: f64| Move {
+        kind,
+        pose: Pose::vertical(DVec3::new(x, y, 14.9359)),
+        feed_mm_per_min: Some(1000.0),
+        line: None,
+        pass: None,
+    };
+    let tp = Toolpath {
+        moves: vec![
+            mv(MoveKind::Rapid, -3.0, 60.3374),
+            mv(MoveKind::Cut, 79.4923, 60.3374),
+            mv(MoveKind::Cut, 79.4923, 65.5648),
+            mv(MoveKind::Cut, -3.0, 65.5648),
+            mv(MoveKind::Cut, -3.0, 71.2648),
+        ],
+    };
+    let cutter: Cutter = "flat:6".parse().unwrap();
+    let model = SweepModel::new(&tp, &cutter, &SweepConfig::default());
+    let sub = RefinedMesh {
+        positions: vec![DVec3::new(0.0, 63.345185937500005, 14.9359)],
+        normals: vec![DVec3::new(-1.0, 0.0, 1.0).normalize()],
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 0.1,
+    };
+    let cfg = DeviationConfig::default();
+    for loc in [Locator::Fast, Locator::Reference] {
+        let m = measure_with(&sub, &[&model], &tp, &cfg, SurfaceModel::Exact, loc).unwrap();
+        let s = m.deviations[0].signed_mm.unwrap();
+        assert!(s.abs() < 1e-9, "{loc:?}: read {s}");
+    }
+}
