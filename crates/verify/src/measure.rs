@@ -937,15 +937,10 @@ fn measure_vectors(
             hi
         });
         // Entries through a column's bottom are the puck's (found above, or by the imprint
-        // surface): only sides and starts are searched, except for a flat end mill, whose
-        // column's bottom is its whole lower surface: searched here too, every move exactly,
-        // its readings do not depend on the imprint surface's triangles (a line through a
-        // vertex that the bottom of a level pass holds exactly, the tool resting at the
-        // vertex's height, met the imprint of the pass before's edge and not its own). An
-        // entry less than `tie` below the best found does not replace it, so boxes that reach
-        // the best only by their padding (half that: the bottoms of the many moves over level
-        // ground where the best lies) are pruned whole.
-        let flat = puck.r == 0.0;
+        // surface): only sides and starts are searched. An entry less than `tie` below the
+        // best found does not replace it, so boxes that reach the best only by their padding
+        // (half that: the bottoms of the many moves over level ground where the best lies)
+        // are pruned whole.
         let tie = 2e-9 * (1.0 + rr);
         let hi = found.map_or(hi, |(e, _)| e.s) - tie;
         columns.visit(line, hi, |ci, hi| {
@@ -957,9 +952,9 @@ fn measure_vectors(
             );
             let seg = Line { hi, ..*line };
             let e = if a.axis == b.axis {
-                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, flat)
+                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
             } else {
-                rf.geometry(mv).and_then(|g| g.column_entry(&seg, flat))
+                rf.geometry(mv).and_then(|g| g.column_entry(&seg, false))
             };
             match e {
                 Some(e) => {
@@ -1046,13 +1041,23 @@ fn measure_vectors(
             // Each crossing's true surface lies at most its window below it. In order of
             // the crossings (lowest first): none beyond the best entry found plus the
             // largest window can win; one whose own window does not reach below the best
-            // entry, or below the lowest crossing, cannot either.
+            // entry, or below the lowest crossing, cannot either. The lowest crossing here
+            // is the lowest not refuted: a crossing whose exact volume the line does not
+            // enter (it grazes a sheet's edge, or a flat sheet with no window at all) says
+            // nothing about where the line enters, and the next one stands in for it.
+            let mut floor = low.s;
+            let mut refuted: Vec<(u8, u64)> = Vec::new();
+            let mut all_refuted = true;
             for c in &f.crossings {
                 if best.is_some_and(|b| c.s - delta > b.0.s) {
                     break;
                 }
+                if all_refuted {
+                    floor = c.s;
+                }
                 let id = rf.identity(c);
                 if done.contains(&id) {
+                    all_refuted &= refuted.contains(&id);
                     continue;
                 }
                 let (piece, _) = unkey(c.key);
@@ -1071,7 +1076,8 @@ fn measure_vectors(
                 let d = ((SAFETY * sag + fan) / c.facing.abs().max(MIN_FACING)).min(delta);
                 // A candidate whose surface cannot lie below the best entry (ties
                 // included: they would not change the answer) is not refined.
-                if c.s > low.s + d || best.is_some_and(|b| c.s - d >= b.0.s) {
+                if c.s > floor + d || best.is_some_and(|b| c.s - d >= b.0.s) {
+                    all_refuted = false;
                     continue;
                 }
                 done.push(id);
@@ -1082,8 +1088,12 @@ fn measure_vectors(
                         p => p,
                     };
                     better(e, mv, (c.model, c.key), src, &mut best);
+                    all_refuted = false;
                 } else if !rf.answers_exactly(c) {
                     inconclusive = true;
+                    all_refuted = false;
+                } else {
+                    refuted.push(id);
                 }
                 // A translation's neighbours at the step's ends: near a joint the other
                 // move's volume may be the lower one.

@@ -446,10 +446,12 @@ fn exact_entries_equal_brute_force_over_every_move() {
 
 /// A flat end mill's level passes at the height of a vertex on a part's edge (the tool
 /// resting on the face the vertex bounds): the vertex is on the bottom of the second pass,
-/// and its vector, along the edge's averaged normal, reads 0. (On the imprint surface the
-/// line met the first pass's edge, whose exact volume it only grazes, and not the second
-/// pass's own triangles; it read the side of the link beyond, 1.39 mm away. Found on
-/// ocl_sphere_on_plate's planned program, whose moves these are.)
+/// and its vector, along the edge's averaged normal, reads 0. (The line's lowest crossing
+/// is on the first pass's edge, whose exact volume it only grazes: refuted. The second
+/// pass's crossing lay 2.5e-16 mm above it, and a flat sheet's window is 0, so it was
+/// skipped as unable to reach below the lowest crossing; the reading fell to the side of
+/// the link beyond, 1.39 mm away. Found on ocl_sphere_on_plate's planned program, whose
+/// moves these are.)
 #[test]
 fn a_flat_bottom_through_the_vertex_reads_zero() {
     let mv = |kind, x: f64, y: f64| Move {
