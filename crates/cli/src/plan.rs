@@ -499,7 +499,8 @@ pub fn run(a: PlanArgs) -> Result<()> {
 /// are located to 1e-5 mm, so "depths" of micrometres and below are noise.
 const HOLDER_CONTACT_MM: f64 = 1e-3;
 
-fn holder_check() -> CheckConfig {
+/// The holder check `cam plan` and `cam verify` run: contacts above [`HOLDER_CONTACT_MM`].
+pub(crate) fn holder_check() -> CheckConfig {
     CheckConfig {
         min_depth_mm: HOLDER_CONTACT_MM,
         ..CheckConfig::default()
@@ -524,7 +525,7 @@ fn fmt_stick(s: &cam_holder::StickOut) -> String {
 }
 
 /// Prints the collision report (first 20 findings) on stderr.
-fn print_collisions(r: &cam_holder::CollisionReport, asm: &ToolAssembly) {
+pub(crate) fn print_collisions(r: &cam_holder::CollisionReport, asm: &ToolAssembly) {
     eprintln!(
         "holder/shank collisions with {} (stick-out {} mm):",
         asm.id, asm.stick_out_mm

@@ -62,7 +62,8 @@ pub struct VerifyArgs {
     /// Cutter spec (ball:D, flat:D, bull:D:r in mm), or a tool id with --tool-library.
     #[arg(long)]
     pub tool: String,
-    /// Tool library (JSON); --tool then names a tool id.
+    /// Tool library (JSON); --tool then names a tool id, and the tool's shank and holder
+    /// are checked against the part along every move (3-axis paths): exit 1 on a collision.
     #[arg(long)]
     pub tool_library: Option<PathBuf>,
     /// Gouge tolerance (mm): exit 1 when a gouge is deeper.
@@ -95,27 +96,66 @@ fn read_toolpath(path: &Path) -> Result<Toolpath> {
 /// Runs `cam verify`.
 pub fn run(a: VerifyArgs) -> Result<()> {
     let mesh = Mesh::load(&a.part, a.units)?;
-    let cutter: Cutter = match &a.tool_library {
+    // With a library the whole assembly is known: its shank and holder are checked too.
+    let assembly = match &a.tool_library {
         Some(lib) => {
             let l = ToolLibrary::load(lib)?;
-            l.get(&a.tool)
-                .with_context(|| format!("{}: no tool '{}'", lib.display(), a.tool))?
-                .cutter
+            Some(
+                l.get(&a.tool)
+                    .with_context(|| format!("{}: no tool '{}'", lib.display(), a.tool))?
+                    .clone(),
+            )
         }
+        None => None,
+    };
+    let cutter: Cutter = match &assembly {
+        Some(t) => t.cutter,
         None => a.tool.parse()?,
     };
     let path = read_toolpath(&a.toolpath)?;
     let v = run_verification(&mesh, &path, &cutter, a.tolerance, &a.opts, a.json)?;
+    // The holder check is exact for 3-axis moves (cam_holder); a 5-axis path is not checked.
+    let holder = assembly.as_ref().map(|asm| {
+        let rep = cam_verify::material::is_three_axis(&path)
+            .then(|| cam_holder::check_toolpath(&mesh, asm, &path, &crate::plan::holder_check()));
+        (asm, rep)
+    });
     let mut report = serde_json::to_value(&v.report)?;
     report["toolpath"] = serde_json::json!(a.toolpath);
     report["part"] = serde_json::json!(a.part);
     report["tool"] = serde_json::json!(cutter.to_string());
     report["timings"] = serde_json::to_value(v.timings)?;
     report["rapids"] = serde_json::to_value(&v.rapids)?;
+    report["holder"] = match &holder {
+        None => serde_json::Value::Null,
+        Some((asm, rep)) => serde_json::json!({
+            "tool": asm.id, "stick_out_mm": asm.stick_out_mm, "checked": rep.is_some(),
+            "collisions": rep.as_ref().map(|r| r.collisions.len()),
+            "max_depth_mm": rep.as_ref().map(|r| r.max_depth_mm),
+            "findings": rep.as_ref().map(|r| r.collisions.iter().take(1000).map(|c| serde_json::json!({
+                "line": c.line, "move_index": c.move_index, "position": c.position.to_array(),
+                "part": c.part.to_string(), "depth_mm": c.depth_mm,
+            })).collect::<Vec<_>>()),
+        }),
+    };
     if a.json {
         println!("{report}");
     } else {
         eprintln!("cam {}", summary_line(&v, a.tolerance));
+        match &holder {
+            None => eprintln!(
+                "cam verify: shank and holder not checked (give the tool with --tool-library)"
+            ),
+            Some((asm, None)) => eprintln!(
+                "cam verify: warning: shank and holder of {} not checked: the path is not 3-axis",
+                asm.id
+            ),
+            Some((asm, Some(r))) if r.is_clear() => eprintln!(
+                "cam verify: shank and holder of {} (stick-out {} mm) clear of the part",
+                asm.id, asm.stick_out_mm
+            ),
+            Some((asm, Some(r))) => crate::plan::print_collisions(r, asm),
+        }
         for w in [topology_warning(&v), rapids_warning(&v)]
             .into_iter()
             .flatten()
@@ -123,7 +163,27 @@ pub fn run(a: VerifyArgs) -> Result<()> {
             eprintln!("cam verify: {w}");
         }
     }
-    verdict(&v, a.tolerance)
+    verdict(&v, a.tolerance)?;
+    if let Some((asm, Some(r))) = &holder
+        && let Some(deepest) = r
+            .collisions
+            .iter()
+            .max_by(|p, q| p.depth_mm.total_cmp(&q.depth_mm))
+    {
+        return Err(Findings(format!(
+            "{} shank/holder collisions with {} at stick-out {} mm; the deepest {:.3} mm ({}){}",
+            r.collisions.len(),
+            asm.id,
+            asm.stick_out_mm,
+            deepest.depth_mm,
+            deepest.part,
+            deepest
+                .line
+                .map_or(String::new(), |l| format!(", toolpath line {l}"))
+        ))
+        .into());
+    }
+    Ok(())
 }
 
 /// Runs the verification and writes the optional outputs.

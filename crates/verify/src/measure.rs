@@ -908,8 +908,9 @@ fn measure_vectors(
     // the cutter is searched directly, move by move: its column (the cutter above its
     // corner, which cuts a wall with its side and reaches deeper than the vectors do) is
     // entered exactly, and a vector that starts inside a move's puck (which may cross none
-    // of its triangles) is entered at its start. The least entry below `hi` and its move,
-    // the lowest-numbered move on ties.
+    // of its triangles) is entered at its start. The least entry below `hi` and its move:
+    // among starts the lowest-numbered move; a column's entry only if it lies below the
+    // best found by more than rounding (see `tie`).
     let cutter_entry = |line: &Line, hi: f64, tests: &mut usize| -> Option<(Entry, u32)> {
         let mut found: Option<(Entry, u32)> = None;
         let take = |e: Entry, mv: u32, found: &mut Option<(Entry, u32)>| {

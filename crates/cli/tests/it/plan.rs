@@ -339,3 +339,75 @@ fn plan_tolerance_leaves_room_for_the_programs_rounding() {
         "{e}"
     );
 }
+
+/// `cam verify` with the tool from a library checks its shank and holder too: the program
+/// `--holder report` wrote for the short tool fails with the holder's 7 mm collision, the
+/// same tool 16 mm out (the minimum is 15) passes, and a bare spec says it did not check.
+#[test]
+fn verify_checks_the_holder_of_a_library_tool() {
+    let d = tempfile::tempdir().unwrap();
+    let lib = write(d.path(), "lib.json", SHORT_TOOL);
+    let long = write(
+        d.path(),
+        "long.json",
+        &SHORT_TOOL.replace("\"stick_out\": 12", "\"stick_out\": 16"),
+    );
+    let out = d.path().join("p.ngc");
+    let o = cam(&[
+        "plan",
+        &pocket(),
+        "--tool-library",
+        lib.to_str().unwrap(),
+        "--tool",
+        "SHORT",
+        "--scallop",
+        "0.1",
+        "--holder",
+        "report",
+        "--no-verify",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let verify = |tool: &[&str]| {
+        let part = pocket();
+        let mut a = vec![
+            "verify",
+            out.to_str().unwrap(),
+            "--part",
+            part.as_str(),
+            "--json",
+        ];
+        a.extend_from_slice(tool);
+        cam(&a)
+    };
+    let o = verify(&["--tool-library", lib.to_str().unwrap(), "--tool", "SHORT"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("shank/holder collisions"),
+        "{}",
+        stderr(&o)
+    );
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let h = &j["holder"];
+    assert!(
+        h["checked"] == true && h["collisions"].as_u64().unwrap() > 0,
+        "{h}"
+    );
+    assert!(
+        (h["max_depth_mm"].as_f64().unwrap() - 7.0).abs() < 1e-6,
+        "{h}"
+    );
+    assert_eq!(h["findings"][0]["part"], "holder cylinder 0", "{h}");
+    assert!(h["findings"][0]["line"].as_u64().unwrap() > 0, "{h}");
+
+    let o = verify(&["--tool-library", long.to_str().unwrap(), "--tool", "SHORT"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(j["holder"]["collisions"], 0, "{}", j["holder"]);
+
+    let o = verify(&["--tool", "ball:6"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(j["holder"].is_null(), "{}", j["holder"]);
+}
