@@ -290,7 +290,8 @@ pub fn summary_line(v: &Verification, tol: f64) -> String {
     });
     let rp = &v.rapids;
     let rapids = if rp.collisions.is_empty() {
-        format!("{} rapids clear of the part", rp.checked)
+        let s = if rp.checked == 1 { "" } else { "s" };
+        format!("{} rapid{s} clear of the part", rp.checked)
     } else {
         format!(
             "{} of {} rapids run into the part (up to {:.4} mm)",
