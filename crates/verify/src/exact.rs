@@ -736,9 +736,12 @@ impl MoveGeometry {
     /// radius `a + r` above the torus centre plane, unbounded up) swept along the move, `lo`
     /// when the line starts inside; with `base` false, entries through its bottom (which
     /// the puck covers) are left out (see [`crate::column::column_translation_entry`]). A
-    /// translation in closed form (exact); a rotating move by the least one-pose entry over
-    /// the poses at `u = 0, 1/8, …, 1`, refined by golden-section search within a pose of
-    /// the least (exact where the entry is unimodal in `u` there).
+    /// translation in closed form (exact). A rotating move by a search over the pose
+    /// parameter `u` of the one-pose entry, scored where a pose is not entered by how far
+    /// the line passes outside its column (so the search is led to the poses the line
+    /// grazes): the least score over 33 poses, refined by golden-section search within a
+    /// pose of it. Every answer is a pose's entry; it is the least where the score is
+    /// unimodal there.
     pub fn column_entry(&self, line: &Line, base: bool) -> Option<Entry> {
         let rr = self.puck.a + self.puck.r;
         if self.is_translation() {
@@ -748,45 +751,55 @@ impl MoveGeometry {
         }
         let at = |u: f64| {
             let (c, k) = self.centre_axis(u);
-            crate::column::column_entry(line, c, k, rr, base)
+            match crate::column::column_entry(line, c, k, rr, base) {
+                Some(e) => (e.s, Some(e)),
+                // Not entered: past the line's end, by the clearance to the column's axis.
+                None => (
+                    line.hi + 1.0 + (segment_ray_distance(line, c, k) - rr).max(0.0),
+                    None,
+                ),
+            }
         };
-        const POSES: usize = 8;
+        const POSES: usize = 32;
         let mut best: Option<(Entry, f64)> = None;
-        let consider = |e: Option<Entry>, u: f64, best: &mut Option<(Entry, f64)>| {
+        let consider = |e: Option<Entry>, best: &mut Option<(Entry, f64)>, u: f64| {
             if let Some(e) = e
                 && best.is_none_or(|(b, _)| e.s < b.s)
             {
                 *best = Some((e, u));
             }
         };
+        let (mut u_best, mut score) = (0.0, f64::INFINITY);
         for i in 0..=POSES {
             let u = i as f64 / POSES as f64;
-            consider(at(u), u, &mut best);
-        }
-        let (_, u_best) = best?;
-        let step = 1.0 / POSES as f64;
-        const G: f64 = 0.618_033_988_749_894_9;
-        let key = |e: &Option<Entry>| e.map_or(f64::INFINITY, |e| e.s);
-        let (mut lo, mut hi) = ((u_best - step).max(0.0), (u_best + step).min(1.0));
-        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
-        let (mut e1, mut e2) = (at(x1), at(x2));
-        while hi - lo > 1e-12 {
-            if key(&e1) <= key(&e2) {
-                consider(e2, x2, &mut best);
-                hi = x2;
-                (x2, e2) = (x1, e1);
-                x1 = hi - G * (hi - lo);
-                e1 = at(x1);
-            } else {
-                consider(e1, x1, &mut best);
-                lo = x1;
-                (x1, e1) = (x2, e2);
-                x2 = lo + G * (hi - lo);
-                e2 = at(x2);
+            let (sc, e) = at(u);
+            consider(e, &mut best, u);
+            if sc < score {
+                (u_best, score) = (u, sc);
             }
         }
-        consider(e1, x1, &mut best);
-        consider(e2, x2, &mut best);
+        let step = 1.0 / POSES as f64;
+        const G: f64 = 0.618_033_988_749_894_9;
+        let (mut lo, mut hi) = ((u_best - step).max(0.0), (u_best + step).min(1.0));
+        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+        let (mut f1, mut f2) = (at(x1), at(x2));
+        while hi - lo > 1e-12 {
+            if f1.0 <= f2.0 {
+                consider(f2.1, &mut best, x2);
+                hi = x2;
+                (x2, f2) = (x1, f1);
+                x1 = hi - G * (hi - lo);
+                f1 = at(x1);
+            } else {
+                consider(f1.1, &mut best, x1);
+                lo = x1;
+                (x1, f1) = (x2, f2);
+                x2 = lo + G * (hi - lo);
+                f2 = at(x2);
+            }
+        }
+        consider(f1.1, &mut best, x1);
+        consider(f2.1, &mut best, x2);
         best.map(|(e, _)| e)
     }
 
@@ -832,6 +845,28 @@ impl MoveGeometry {
     pub fn cutter_depth_at(&self, p: DVec3) -> f64 {
         self.depth_at(p).max(self.column_depth_at(p))
     }
+}
+
+/// The distance (mm) between the segment `lo..hi` of `line` and the ray from `c` along the
+/// unit `k` (closest points by alternating exact minimisation, clamped to the segment and
+/// the ray: two rounds, a guide for a search, not an answer).
+fn segment_ray_distance(line: &Line, c: DVec3, k: DVec3) -> f64 {
+    let w = line.o - c;
+    let (b, wn, wk) = (line.n.dot(k), w.dot(line.n), w.dot(k));
+    let den = 1.0 - b * b;
+    let mut s = if den > 1e-12 {
+        (b * wk - wn) / den
+    } else {
+        -wn
+    };
+    let mut t = 0.0;
+    for _ in 0..2 {
+        s = s.clamp(line.lo, line.hi);
+        t = (s * b + wk).max(0.0);
+        s = t * b - wn;
+    }
+    let s = s.clamp(line.lo, line.hi);
+    (w + s * line.n - t * k).length()
 }
 
 /// The body frame used to name inserts along a rotating move: `e1` at a reference pose
