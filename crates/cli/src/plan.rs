@@ -382,10 +382,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
     let holder_json = serde_json::json!({
         "tool": assembly.id, "stick_out_mm": assembly.stick_out_mm,
         "collisions": report.collisions.len(), "max_depth_mm": report.max_depth_mm,
-        "findings": first_report.collisions.iter().take(1000).map(|c| serde_json::json!({
-            "line": c.line, "pass": c.pass, "position_mm": [c.position.x, c.position.y, c.position.z],
-            "part": c.part.to_string(), "depth_mm": c.depth_mm,
-        })).collect::<Vec<_>>(),
+        "findings": findings_json(&first_report),
         "min_stick_out_mm": stick.min_mm, "policy": format!("{:?}", a.holder).to_lowercase(),
         "removed_cut_length_mm": avoided.as_ref().map(|s| s.removed_cut_length_mm),
         "unmachined_area_mm2": avoided.as_ref().map(|s| s.unmachined_area_mm2),
@@ -522,6 +519,21 @@ fn fmt_stick(s: &cam_holder::StickOut) -> String {
         Some(m) => format!("{m:.3} mm"),
         None => "none (the shank itself collides)".into(),
     }
+}
+
+/// The first 1000 collisions of a holder check, for `--json` (`cam plan` and `cam verify`).
+pub(crate) fn findings_json(r: &cam_holder::CollisionReport) -> Vec<serde_json::Value> {
+    r.collisions
+        .iter()
+        .take(1000)
+        .map(|c| {
+            serde_json::json!({
+                "line": c.line, "pass": c.pass,
+                "position_mm": [c.position.x, c.position.y, c.position.z],
+                "part": c.part.to_string(), "depth_mm": c.depth_mm,
+            })
+        })
+        .collect()
 }
 
 /// Prints the collision report (first 20 findings) on stderr.

@@ -132,10 +132,7 @@ pub fn run(a: VerifyArgs) -> Result<()> {
             "tool": asm.id, "stick_out_mm": asm.stick_out_mm, "checked": rep.is_some(),
             "collisions": rep.as_ref().map(|r| r.collisions.len()),
             "max_depth_mm": rep.as_ref().map(|r| r.max_depth_mm),
-            "findings": rep.as_ref().map(|r| r.collisions.iter().take(1000).map(|c| serde_json::json!({
-                "line": c.line, "move_index": c.move_index, "position": c.position.to_array(),
-                "part": c.part.to_string(), "depth_mm": c.depth_mm,
-            })).collect::<Vec<_>>()),
+            "findings": rep.as_ref().map(crate::plan::findings_json),
         }),
     };
     if a.json {

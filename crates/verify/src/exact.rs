@@ -671,26 +671,7 @@ impl MoveGeometry {
             let (c, k) = self.centre_axis(u);
             self.puck.disk_distance(p - c, k).0
         };
-        const G: f64 = 0.618_033_988_749_894_9;
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
-        let mut best = dist(0.0).min(dist(1.0));
-        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
-        let (mut f1, mut f2) = (dist(x1), dist(x2));
-        while hi - lo > 1e-12 {
-            best = best.min(f1).min(f2);
-            if f1 <= f2 {
-                hi = x2;
-                (x2, f2) = (x1, f1);
-                x1 = hi - G * (hi - lo);
-                f1 = dist(x1);
-            } else {
-                lo = x1;
-                (x1, f1) = (x2, f2);
-                x2 = lo + G * (hi - lo);
-                f2 = dist(x2);
-            }
-        }
-        (r - best.min(f1).min(f2)).max(0.0)
+        (r - golden_min(0.0, 1.0, dist)).max(0.0)
     }
 
     /// First entry of `line` into the puck swept along the whole move, when it is a
@@ -761,46 +742,30 @@ impl MoveGeometry {
             }
         };
         const POSES: usize = 32;
-        let mut best: Option<(Entry, f64)> = None;
-        let consider = |e: Option<Entry>, best: &mut Option<(Entry, f64)>, u: f64| {
+        let mut best: Option<Entry> = None;
+        let consider = |e: Option<Entry>, best: &mut Option<Entry>| {
             if let Some(e) = e
-                && best.is_none_or(|(b, _)| e.s < b.s)
+                && best.is_none_or(|b| e.s < b.s)
             {
-                *best = Some((e, u));
+                *best = Some(e);
             }
         };
         let (mut u_best, mut score) = (0.0, f64::INFINITY);
         for i in 0..=POSES {
             let u = i as f64 / POSES as f64;
             let (sc, e) = at(u);
-            consider(e, &mut best, u);
+            consider(e, &mut best);
             if sc < score {
                 (u_best, score) = (u, sc);
             }
         }
         let step = 1.0 / POSES as f64;
-        const G: f64 = 0.618_033_988_749_894_9;
-        let (mut lo, mut hi) = ((u_best - step).max(0.0), (u_best + step).min(1.0));
-        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
-        let (mut f1, mut f2) = (at(x1), at(x2));
-        while hi - lo > 1e-12 {
-            if f1.0 <= f2.0 {
-                consider(f2.1, &mut best, x2);
-                hi = x2;
-                (x2, f2) = (x1, f1);
-                x1 = hi - G * (hi - lo);
-                f1 = at(x1);
-            } else {
-                consider(f1.1, &mut best, x1);
-                lo = x1;
-                (x1, f1) = (x2, f2);
-                x2 = lo + G * (hi - lo);
-                f2 = at(x2);
-            }
-        }
-        consider(f1.1, &mut best, x1);
-        consider(f2.1, &mut best, x2);
-        best.map(|(e, _)| e)
+        golden_min((u_best - step).max(0.0), (u_best + step).min(1.0), |u| {
+            let (sc, e) = at(u);
+            consider(e, &mut best);
+            sc
+        });
+        best
     }
 
     /// How deep `p` lies in the column swept along the move (mm, 0 outside): the largest
@@ -817,26 +782,7 @@ impl MoveGeometry {
             let axial = q.dot(k);
             (rr - (q - axial * k).length()).min(axial)
         };
-        const G: f64 = 0.618_033_988_749_894_9;
-        let (mut lo, mut hi) = (0.0f64, 1.0f64);
-        let mut best = depth(0.0).max(depth(1.0));
-        let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
-        let (mut f1, mut f2) = (depth(x1), depth(x2));
-        while hi - lo > 1e-12 {
-            best = best.max(f1).max(f2);
-            if f1 >= f2 {
-                hi = x2;
-                (x2, f2) = (x1, f1);
-                x1 = hi - G * (hi - lo);
-                f1 = depth(x1);
-            } else {
-                lo = x1;
-                (x1, f1) = (x2, f2);
-                x2 = lo + G * (hi - lo);
-                f2 = depth(x2);
-            }
-        }
-        best.max(f1).max(f2).max(0.0)
+        (-golden_min(0.0, 1.0, |u| -depth(u))).max(0.0)
     }
 
     /// How deep `p` lies in the whole cutter swept along the move, puck or column (mm, 0
@@ -845,6 +791,31 @@ impl MoveGeometry {
     pub fn cutter_depth_at(&self, p: DVec3) -> f64 {
         self.depth_at(p).max(self.column_depth_at(p))
     }
+}
+
+/// The least value of `f` seen by a golden-section search for its minimum over
+/// `[lo, hi]`, the ends included, until the bracket is 1e-12 wide: the minimum where `f`
+/// is unimodal there.
+fn golden_min(mut lo: f64, mut hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    const G: f64 = 0.618_033_988_749_894_9;
+    let mut best = f(lo).min(f(hi));
+    let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
+    let (mut f1, mut f2) = (f(x1), f(x2));
+    while hi - lo > 1e-12 {
+        best = best.min(f1).min(f2);
+        if f1 <= f2 {
+            hi = x2;
+            (x2, f2) = (x1, f1);
+            x1 = hi - G * (hi - lo);
+            f1 = f(x1);
+        } else {
+            lo = x1;
+            (x1, f1) = (x2, f2);
+            x2 = lo + G * (hi - lo);
+            f2 = f(x2);
+        }
+    }
+    best.min(f1).min(f2)
 }
 
 /// The distance (mm) between the segment `lo..hi` of `line` and the ray from `c` along the

@@ -42,12 +42,14 @@ pub struct InnerLengths {
     pub open_above: usize,
 }
 
-/// True when every pose of `toolpath` has the axis +Z (to 1e-12).
+/// True when the unit axis `k` is +Z (to 1e-12).
+pub fn is_vertical(k: DVec3) -> bool {
+    (k - DVec3::Z).length() <= 1e-12
+}
+
+/// True when every pose of `toolpath` has the axis +Z ([`is_vertical`]).
 pub fn is_three_axis(toolpath: &Toolpath) -> bool {
-    toolpath
-        .moves
-        .iter()
-        .all(|m| (m.pose.axis - DVec3::Z).length() <= 1e-12)
+    toolpath.moves.iter().all(|m| is_vertical(m.pose.axis))
 }
 
 /// The inner length of every vector of `refined` (see the module documentation): at most

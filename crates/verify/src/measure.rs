@@ -439,6 +439,26 @@ const COLUMN: u8 = u8::MAX;
 /// The model index that marks a move's puck in [`Extras::items`].
 const PUCK: u8 = u8::MAX - 1;
 
+/// The feed moves of `toolpath` that go somewhere: `(move index, pose before, pose after,
+/// torus centre before, after)` for a cutter of corner radius `r`.
+fn feed_moves(
+    toolpath: &Toolpath,
+    r: f64,
+) -> impl Iterator<Item = (u32, cam_core::Pose, cam_core::Pose, DVec3, DVec3)> + '_ {
+    toolpath
+        .moves
+        .windows(2)
+        .enumerate()
+        .filter(|(_, w)| {
+            let (a, b) = (w[0].pose, w[1].pose);
+            w[1].kind != cam_core::MoveKind::Rapid && (a.tip != b.tip || a.axis != b.axis)
+        })
+        .map(move |(i, w)| {
+            let (a, b) = (w[0].pose, w[1].pose);
+            ((i + 1) as u32, a, b, a.tip + r * a.axis, b.tip + r * b.axis)
+        })
+}
+
 /// Half-extents (mm) of a torus puck (major radius `a`, tube `r`) about the unit axis `k`,
 /// padded for rounding.
 fn puck_extent(a: f64, r: f64, k: DVec3, pad: f64) -> DVec3 {
@@ -510,45 +530,25 @@ impl Extras {
                 )
             })
             .collect();
-        for (i, w) in toolpath.moves.windows(2).enumerate() {
-            let (a, b) = (w[0].pose, w[1].pose);
-            if w[1].kind == cam_core::MoveKind::Rapid || (a.tip == b.tip && a.axis == b.axis) {
-                continue;
-            }
-            let (c0, c1) = (a.tip + puck.r * a.axis, b.tip + puck.r * b.axis);
-            let (lo, hi) = if a.axis == b.axis {
+        for (mv, a, b, c0, c1) in feed_moves(toolpath, puck.r) {
+            let far = |f: &dyn Fn(DVec3) -> f64| corners.iter().map(|&q| f(q)).fold(0.0, f64::max);
+            let (l, e) = if a.axis == b.axis {
                 let k = a.axis;
-                let l = corners
-                    .iter()
-                    .map(|&q| (q - c0).dot(k).max((q - c1).dot(k)))
-                    .fold(0.0f64, f64::max);
-                let e = puck_extent(rr, 0.0, k, pad);
-                let (top0, top1) = (c0 + l * k, c1 + l * k);
-                (
-                    c0.min(c1).min(top0).min(top1) - e,
-                    c0.max(c1).max(top0).max(top1) + e,
-                )
+                let l = far(&|q| (q - c0).dot(k).max((q - c1).dot(k)));
+                (l, puck_extent(rr, 0.0, k, pad))
             } else {
-                let l = corners
-                    .iter()
-                    .map(|&q| q.distance(c0))
-                    .fold(0.0f64, f64::max)
-                    + c0.distance(c1)
-                    + puck.r;
-                let half = 0.5 * a.axis.angle_between(b.axis);
-                let sag = (puck.r + l) * (1.0 - half.cos());
-                let e = DVec3::splat(rr + sag + pad);
-                let (top0, top1) = (c0 + l * a.axis, c1 + l * b.axis);
-                (
-                    c0.min(c1).min(top0).min(top1) - e,
-                    c0.max(c1).max(top0).max(top1) + e,
-                )
+                let l = far(&|q| q.distance(c0)) + c0.distance(c1) + puck.r;
+                let sag = (puck.r + l) * (1.0 - (0.5 * a.axis.angle_between(b.axis)).cos());
+                (l, DVec3::splat(rr + sag + pad))
             };
+            let (top0, top1) = (c0 + l * a.axis, c1 + l * b.axis);
+            let lo = c0.min(c1).min(top0).min(top1) - e;
+            let hi = c0.max(c1).max(top0).max(top1) + e;
             // Wholly outside the vectors' reach: never entered.
             if lo.cmpgt(reach.1).any() || hi.cmplt(reach.0).any() {
                 continue;
             }
-            items.push((COLUMN, (i + 1) as u32, c0, c1));
+            items.push((COLUMN, mv, c0, c1));
             bounds.push((lo, hi));
         }
         Extras::from_items(items, bounds, 0.0)
@@ -566,18 +566,13 @@ impl Extras {
         };
         let puck = Puck::of(m.cutter());
         let pad = 1e-9 * (1.0 + puck.a + puck.r);
-        for (i, w) in toolpath.moves.windows(2).enumerate() {
-            let (a, b) = (w[0].pose, w[1].pose);
-            if w[1].kind == cam_core::MoveKind::Rapid || (a.tip == b.tip && a.axis == b.axis) {
-                continue;
-            }
-            let (c0, c1) = (a.tip + puck.r * a.axis, b.tip + puck.r * b.axis);
+        for (mv, a, b, c0, c1) in feed_moves(toolpath, puck.r) {
             let e = if a.axis == b.axis {
                 puck_extent(puck.a, puck.r, a.axis, pad)
             } else {
                 DVec3::splat(puck.a + 2.0 * puck.r + pad)
             };
-            items.push((PUCK, (i + 1) as u32, c0, c1));
+            items.push((PUCK, mv, c0, c1));
             bounds.push((c0.min(c1) - e, c0.max(c1) + e));
         }
         Extras::from_items(items, bounds, 0.0)

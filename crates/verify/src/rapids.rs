@@ -68,7 +68,7 @@ pub fn check_rapids(
                 && (i == 0 || start(i).tip != toolpath.moves[i].pose.tip)
         })
         .collect();
-    let vertical = |k: DVec3| (k - DVec3::Z).length() <= 1e-12;
+    let vertical = crate::material::is_vertical;
     let (checked, unchecked): (Vec<usize>, Vec<usize>) = rapids
         .into_iter()
         .partition(|&i| vertical(start(i).axis) && vertical(toolpath.moves[i].pose.axis));

@@ -181,6 +181,26 @@ fn box_obj(x0: f64, x1: f64) -> String {
     s
 }
 
+/// `cam verify NGC --part PART --tool TOOL --json EXTRA…`.
+fn verify_json(
+    ngc: &std::path::Path,
+    part: &std::path::Path,
+    tool: &str,
+    extra: &[&str],
+) -> std::process::Output {
+    let mut a = vec![
+        "verify",
+        ngc.to_str().unwrap(),
+        "--part",
+        part.to_str().unwrap(),
+        "--tool",
+        tool,
+        "--json",
+    ];
+    a.extend_from_slice(extra);
+    cam(&a)
+}
+
 /// `cam verify NGC --part PART --tool TOOL --surface SURFACE --json`, which must exit 1 (a
 /// gouge beyond the tolerance); its report.
 fn verify_gouging(
@@ -189,17 +209,7 @@ fn verify_gouging(
     tool: &str,
     surface: &str,
 ) -> serde_json::Value {
-    let o = cam(&[
-        "verify",
-        ngc.to_str().unwrap(),
-        "--part",
-        part.to_str().unwrap(),
-        "--tool",
-        tool,
-        "--surface",
-        surface,
-        "--json",
-    ]);
+    let o = verify_json(ngc, part, tool, &["--surface", surface]);
     assert_eq!(o.status.code(), Some(1), "{tool} {surface}: {}", stderr(&o));
     serde_json::from_slice(&o.stdout).unwrap()
 }
@@ -315,17 +325,7 @@ fn a_wall_cut_by_the_side_above_the_corner_is_a_gouge() {
         ("ball:6", 0.0, 3.0),
     ] {
         let ply = d.path().join("dev.ply");
-        let o = cam(&[
-            "verify",
-            ngc.to_str().unwrap(),
-            "--part",
-            part.to_str().unwrap(),
-            "--tool",
-            tool,
-            "--json",
-            "--deviation",
-            ply.to_str().unwrap(),
-        ]);
+        let o = verify_json(&ngc, &part, tool, &["--deviation", ply.to_str().unwrap()]);
         assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         let g = j["max_gouge_mm"].as_f64().unwrap();
@@ -371,15 +371,7 @@ fn a_rapid_through_the_part_fails_the_check() {
          G1 X15 F500\nG0 Z10\nM30\n",
     );
     for tool in ["flat:6", "ball:6"] {
-        let o = cam(&[
-            "verify",
-            ngc.to_str().unwrap(),
-            "--part",
-            part.to_str().unwrap(),
-            "--tool",
-            tool,
-            "--json",
-        ]);
+        let o = verify_json(&ngc, &part, tool, &[]);
         assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
         assert!(stderr(&o).contains("line 5"), "{tool}: {}", stderr(&o));
         let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
