@@ -150,6 +150,32 @@ pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 /// Vectors located and refined per chunk (progress is reported between chunks).
 const MEASURE_CHUNK: usize = 1 << 17;
 
+/// The interval of `s` where `line` lies within `r` of the range between `z0` and `z1` along
+/// the unit `k` (unbounded when the line runs across `k` inside it), if any.
+fn slab_interval(line: &Line, k: DVec3, z0: f64, z1: f64, r: f64) -> Option<(f64, f64)> {
+    let (lo, hi) = (z0.min(z1) - r, z0.max(z1) + r);
+    let (q, nk) = (line.o.dot(k), line.n.dot(k));
+    if nk == 0.0 {
+        return (lo..=hi)
+            .contains(&q)
+            .then_some((f64::NEG_INFINITY, f64::INFINITY));
+    }
+    let (a, b) = ((lo - q) / nk, (hi - q) / nk);
+    Some((a.min(b), a.max(b)))
+}
+
+/// Whether the segment `lo..hi` of `line` passes within `rr` of the segment `c0 c1` by the
+/// bounding sphere of that segment's capsule (a cheap necessary test).
+fn near_capsule(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) -> bool {
+    let m = 0.5 * (c0 + c1);
+    let rho = 0.5 * c0.distance(c1) + rr;
+    let t = (m - line.o).dot(line.n).clamp(line.lo, hi);
+    (line.o + t * line.n).distance_squared(m) <= rho * rho * (1.0 + 1e-12)
+}
+
+/// Vectors per tile of the direct search (see `measure_vectors`).
+const DIRECT_TILE: usize = 256;
+
 const SAFETY: f64 = 4.0;
 const MIN_FACING: f64 = 0.5;
 
@@ -578,6 +604,20 @@ impl Extras {
         Extras::from_items(items, bounds, 0.0)
     }
 
+    /// The pucks of every feed move of `toolpath`, all translations, for the cutter's `puck`
+    /// (a flat end mill's disk included): items `(PUCK, move, centre at its start, centre at
+    /// its end)`, each boxed by the pucks at its two ends.
+    fn volumes(toolpath: &Toolpath, puck: Puck) -> Extras {
+        let (mut items, mut bounds) = (Vec::new(), Vec::new());
+        let pad = 1e-9 * (1.0 + puck.a + puck.r);
+        for (mv, a, _, c0, c1) in feed_moves(toolpath, puck.r) {
+            let e = puck_extent(puck.a, puck.r, a.axis, pad);
+            items.push((PUCK, mv, c0, c1));
+            bounds.push((c0.min(c1) - e, c0.max(c1) + e));
+        }
+        Extras::from_items(items, bounds, 0.0)
+    }
+
     /// The hierarchy over `items` with their boxes.
     fn from_items(
         items: Vec<(u8, u32, DVec3, DVec3)>,
@@ -867,7 +907,17 @@ fn measure_vectors(
     // passing just outside a triangle counts: the true sheet bulges past its chords by up to
     // the sag, so near a sheet's curved edge a line can enter it and miss its triangles.
     let margin = if exact { edge_margin(models) } else { 0.0 };
+    let puck = models
+        .first()
+        .map_or(Puck { a: 0.0, r: 0.0 }, |m| Puck::of(m.cutter()));
+    // Every feed move a translation (every 3-axis program): the swept volume is the union of
+    // the moves' convex volumes (puck and column), each entered exactly, so the first entry
+    // is found among them directly (see `direct_one`) and no crossing is located.
+    let direct = exact
+        && locator == Locator::Fast
+        && feed_moves(toolpath, puck.r).all(|(_, a, b, _, _)| a.axis == b.axis);
     let bvhs: Vec<PatchBvh> = match locator {
+        Locator::Fast if direct => Vec::new(),
         Locator::Fast => models
             .iter()
             .map(|m| PatchBvh::new(m, !exact, margin))
@@ -879,15 +929,12 @@ fn measure_vectors(
         Locator::Fast => locate(&pairs, vs, delta, margin),
         Locator::Reference => crate::locate::locate_reference(models, vs, delta, margin, !exact),
     };
-    let puck = models
-        .first()
-        .map_or(Puck { a: 0.0, r: 0.0 }, |m| Puck::of(m.cutter()));
     let rf = Refiner {
         models,
         toolpath,
         puck,
     };
-    let extras = exact.then(|| Extras::new(models));
+    let extras = (exact && !direct).then(|| Extras::new(models));
     // Every vector lies in this box.
     let reach = vectors.iter().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
@@ -898,7 +945,48 @@ fn measure_vectors(
     );
     let columns = Extras::columns(models, toolpath, reach);
     let pucks = Extras::pucks(models, toolpath);
+    let volumes = if direct {
+        Extras::volumes(toolpath, puck)
+    } else {
+        Extras::from_items(Vec::new(), Vec::new(), 0.0)
+    };
     let rr = puck.a + puck.r;
+    // Entries through a column's bottom are the puck's (found before, or by the imprint
+    // surface): only sides and starts are searched. An entry less than `tie` below the best
+    // found does not replace it, so boxes that reach the best only by their padding (half
+    // that: the bottoms of the many moves over level ground where the best lies) are pruned
+    // whole.
+    let column_entry =
+        |line: &Line, hi: f64, found: &mut Option<(Entry, u32)>, tests: &mut usize| {
+            let take = |e: Entry, mv: u32, found: &mut Option<(Entry, u32)>| {
+                if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
+                    *found = Some((e, mv));
+                }
+            };
+            let tie = 2e-9 * (1.0 + rr);
+            let hi = found.map_or(hi, |(e, _)| e.s) - tie;
+            columns.visit(line, hi, |ci, hi| {
+                let (_, mv, c0, c1) = columns.items[ci];
+                *tests += 1;
+                let (a, b) = (
+                    toolpath.moves[mv as usize - 1].pose,
+                    toolpath.moves[mv as usize].pose,
+                );
+                let seg = Line { hi, ..*line };
+                let e = if a.axis == b.axis {
+                    crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
+                } else {
+                    rf.geometry(mv).and_then(|g| g.column_entry(&seg, false))
+                };
+                match e {
+                    Some(e) => {
+                        take(e, mv, found);
+                        hi.min(e.s - tie)
+                    }
+                    None => hi,
+                }
+            });
+        };
     // Both surface models: the imprint surface holds the cutter's corner only. The rest of
     // the cutter is searched directly, move by move: its column (the cutter above its
     // corner, which cuts a wall with its side and reaches deeper than the vectors do) is
@@ -932,42 +1020,133 @@ fn measure_vectors(
             }
             hi
         });
-        // Entries through a column's bottom are the puck's (found above, or by the imprint
-        // surface): only sides and starts are searched. An entry less than `tie` below the
-        // best found does not replace it, so boxes that reach the best only by their padding
-        // (half that: the bottoms of the many moves over level ground where the best lies)
-        // are pruned whole.
-        let tie = 2e-9 * (1.0 + rr);
-        let hi = found.map_or(hi, |(e, _)| e.s) - tie;
-        columns.visit(line, hi, |ci, hi| {
-            let (_, mv, c0, c1) = columns.items[ci];
-            *tests += 1;
-            let (a, b) = (
-                toolpath.moves[mv as usize - 1].pose,
-                toolpath.moves[mv as usize].pose,
-            );
-            let seg = Line { hi, ..*line };
-            let e = if a.axis == b.axis {
-                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
-            } else {
-                rf.geometry(mv).and_then(|g| g.column_entry(&seg, false))
-            };
-            match e {
-                Some(e) => {
-                    take(e, mv, &mut found);
-                    hi.min(e.s - tie)
-                }
-                None => hi,
-            }
-        });
+        column_entry(line, hi, &mut found, tests);
         found
     };
     let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
+    type PerVector = (Deviation, f64, Option<f64>, Option<Source>, [usize; 5]);
+    // A vector's first entry into the union of the moves' volumes, every move a translation:
+    // the least entry into a move's puck (closed form for a ball and a flat end mill, Newton
+    // for a bull, whose puck lies in the capsule of radius `a + r` about the centre's
+    // segment, tested first), then into a column's side (`column_entry`); among equal
+    // entries the lowest-numbered move's. This is the brute force over every move, pruned by
+    // the boxes the shrinking segment `lo..best` still meets.
+    let common_axis = {
+        let mut axes = feed_moves(toolpath, 0.0).map(|(_, a, _, _, _)| a.axis);
+        let first = axes.next();
+        first.filter(|&k| axes.all(|a| a == k))
+    };
+    let entry_of = |line: &Line, mv: u32, c0: DVec3, c1: DVec3| {
+        let k = common_axis.unwrap_or_else(|| toolpath.moves[mv as usize].pose.axis);
+        crate::exact::translation_entry(line, &puck, c0, c1, k)
+    };
+    let seed_of = |mv: u32| {
+        let (a, b) = (
+            toolpath.moves[mv as usize - 1].pose,
+            toolpath.moves[mv as usize].pose,
+        );
+        Some((mv, a.tip + puck.r * a.axis, b.tip + puck.r * b.axis))
+    };
+    let direct_one = |v: &Vector, seed: Option<(u32, DVec3, DVec3)>| -> PerVector {
+        let mut stats = [0usize; 5];
+        let line = Line {
+            o: v.o,
+            n: v.n,
+            lo: v.lo,
+            hi: v.hi,
+        };
+        let mut found: Option<(Entry, u32)> = None;
+        // The move that cut the previous vector (a neighbour): its entry, if any, bounds the
+        // search from the start. It is met again in the tree and changes nothing there.
+        if let Some((mv, c0, c1)) = seed {
+            stats[1] += 1;
+            found = entry_of(&line, mv, c0, c1)
+                .filter(|e| facing_ok(e.normal.dot(v.n)))
+                .map(|e| (e, mv));
+        }
+        let mut try_move = |ci: usize, found: &mut Option<(Entry, u32)>| {
+            let (_, mv, c0, c1) = volumes.items[ci];
+            let seg = Line {
+                hi: found.map_or(v.hi, |(f, _)| f.s),
+                ..line
+            };
+            if !near_capsule(&line, seg.hi, c0, c1, rr) {
+                return;
+            }
+            stats[1] += 1;
+            if let Some(e) = entry_of(&seg, mv, c0, c1)
+                && facing_ok(e.normal.dot(v.n))
+                && found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm))
+            {
+                *found = Some((e, mv));
+            }
+        };
+        let hi0 = found.map_or(v.hi, |(f, _)| f.s);
+        if puck.a > 0.0 && puck.r > 0.0 {
+            // A bull's entry costs a Newton search: the moves whose capsule of radius
+            // `a + r` (which holds the puck: its entry is a lower bound) the segment enters,
+            // in the order of those bounds, until a bound lies beyond the best entry.
+            let mut queue: Vec<(f64, u32)> = Vec::new();
+            volumes.visit(&line, hi0, |ci, hi| {
+                let (_, mv, c0, c1) = volumes.items[ci];
+                if !near_capsule(&line, hi, c0, c1, rr) {
+                    return hi;
+                }
+                let k = common_axis.unwrap_or_else(|| toolpath.moves[mv as usize].pose.axis);
+                // The puck also lies in the slab `r` either side of the centres along `k`.
+                let Some((s0, s1)) = slab_interval(&line, k, c0.dot(k), c1.dot(k), puck.r) else {
+                    return hi;
+                };
+                let seg = Line {
+                    lo: line.lo.max(s0),
+                    hi: hi.min(s1),
+                    ..line
+                };
+                if seg.lo > seg.hi {
+                    return hi;
+                }
+                if let Some(b) = crate::exact::capsule_entry(&seg, c0, c1, rr) {
+                    queue.push((b.s, ci as u32));
+                }
+                hi
+            });
+            queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+            for (bound, ci) in queue {
+                if found.is_some_and(|(f, _)| bound > f.s) {
+                    break;
+                }
+                try_move(ci as usize, &mut found);
+            }
+        } else {
+            volumes.visit(&line, hi0, |ci, hi| {
+                try_move(ci, &mut found);
+                found.map_or(hi, |(f, _)| f.s.min(hi))
+            });
+        }
+        column_entry(&line, v.hi, &mut found, &mut stats[1]);
+        let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
+            let dev = Deviation {
+                position: v.o,
+                normal: v.n,
+                signed_mm: None,
+                source_move: None,
+            };
+            return (dev, 0.0, None, None, stats);
+        };
+        stats[0] = 1;
+        stats[2] = 1;
+        let dev = Deviation {
+            position: v.o,
+            normal: v.n,
+            signed_mm: Some(e.s),
+            source_move: Some(mv),
+        };
+        (dev, e.normal.dot(v.n), None, Some(Source::Move(mv)), stats)
+    };
     let move_of = |c: &Crossing| {
         let (piece, _) = unkey(c.key);
         models[c.model as usize].pieces[piece].source_move()
     };
-    type PerVector = (Deviation, f64, Option<f64>, Option<Source>, [usize; 5]);
     let one = |(v, f): (&Vector, &crate::locate::Found)| -> PerVector {
         let mut stats = [0usize; 5];
         let dev = |s: Option<f64>, mv: Option<u32>| Deviation {
@@ -1221,8 +1400,50 @@ fn measure_vectors(
     // In chunks, for progress; each vector's answer depends on the vector alone.
     let mut per: Vec<PerVector> = Vec::with_capacity(vectors.len());
     for chunk in vectors.chunks(MEASURE_CHUNK) {
-        let found = find(chunk);
-        per.par_extend(chunk.par_iter().zip(found.par_iter()).map(one));
+        if direct {
+            // In tiles of neighbouring vectors (Morton order of their origins), each seeded
+            // by the move that cut the one before; the answers do not depend on the seeds.
+            let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
+            let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
+            order.sort_unstable();
+            let tiles: Vec<Vec<(u32, PerVector)>> = order
+                .par_chunks(DIRECT_TILE)
+                .map(|tile| {
+                    let mut seed = None;
+                    tile.iter()
+                        .map(|&(_, i)| {
+                            let r = direct_one(&chunk[i as usize], seed);
+                            if let Some(mv) = r.0.source_move {
+                                seed = seed_of(mv);
+                            }
+                            (i, r)
+                        })
+                        .collect()
+                })
+                .collect();
+            let base = per.len();
+            per.extend(std::iter::repeat_n(
+                (
+                    Deviation {
+                        position: DVec3::ZERO,
+                        normal: DVec3::ZERO,
+                        signed_mm: None,
+                        source_move: None,
+                    },
+                    0.0,
+                    None,
+                    None,
+                    [0; 5],
+                ),
+                chunk.len(),
+            ));
+            for (i, r) in tiles.into_iter().flatten() {
+                per[base + i as usize] = r;
+            }
+        } else {
+            let found = find(chunk);
+            per.par_extend(chunk.par_iter().zip(found.par_iter()).map(one));
+        }
         if let Some(p) = progress {
             p(per.len(), vectors.len());
         }

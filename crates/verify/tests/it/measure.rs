@@ -80,6 +80,77 @@ fn assert_same(a: &Measurement, b: &Measurement, what: &str) {
     assert_eq!(a.stats, b.stats, "{what}");
 }
 
+/// The direct measurement `a` of a path of translations against the crossing-based
+/// reference `b`: where both read a vertex, the readings and entry facings agree to 1e-9.
+/// The reference finds entries through the imprint surface's triangles, and a line that
+/// grazes a move's volume may cross none of them: where only `a` reads a vertex, its
+/// reading must equal the brute force over every move's puck and column, and such
+/// vertices must be few (at most 0.1 %). `b` never reads a vertex `a` does not.
+fn assert_same_readings(
+    a: &Measurement,
+    b: &Measurement,
+    r: &RefinedMesh,
+    tp: &Toolpath,
+    cutter: &Cutter,
+    what: &str,
+) {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    assert_eq!(a.deviations.len(), b.deviations.len());
+    let cfg = DeviationConfig::default();
+    let brute = |i: usize| {
+        let line = Line {
+            o: r.positions[i],
+            n: r.normals[i],
+            lo: -cfg.inside_mm,
+            hi: cfg.outside_mm,
+        };
+        tp.moves
+            .windows(2)
+            .filter(|w| w[1].kind != MoveKind::Rapid)
+            .flat_map(|w| {
+                let g = MoveGeometry {
+                    a: w[0].pose,
+                    b: w[1].pose,
+                    puck: Puck::of(cutter),
+                };
+                [g.translation_entry(&line), g.column_entry(&line, false)]
+            })
+            .flatten()
+            .filter(|e| e.normal.dot(line.n) < 0.0)
+            .map(|e| e.s)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let (mut differ, mut grazing) = (0, 0);
+    for (i, (x, y)) in a.deviations.iter().zip(&b.deviations).enumerate() {
+        let same = match (x.signed_mm, y.signed_mm) {
+            (Some(p), Some(q)) => {
+                (p - q).abs() <= 1e-9 && (a.facing[i] - b.facing[i]).abs() <= 1e-9
+            }
+            (None, None) => true,
+            (Some(p), None) if (p - brute(i)).abs() <= 1e-9 => {
+                grazing += 1;
+                true
+            }
+            _ => false,
+        };
+        if !same {
+            differ += 1;
+            if differ < 5 {
+                eprintln!(
+                    "{what}: vertex {i}: {x:?} ({}) vs {y:?} ({})",
+                    a.facing[i], b.facing[i]
+                );
+            }
+        }
+    }
+    assert_eq!(differ, 0, "{what}: {differ} vertices differ");
+    assert!(
+        grazing * 1000 <= a.deviations.len(),
+        "{what}: {grazing} vertices read by the direct search only"
+    );
+    eprintln!("{what}: {grazing} vertices read by the direct search only");
+}
+
 /// The fast locator finds exactly the crossings the reference finds (every triangle of the
 /// swept surface in one BVH, every crossing collected, then selected; every cap tested), so
 /// the measured deviations are bit-identical, on the linear and on the exact surface: a
@@ -96,7 +167,14 @@ fn fast_locator_equals_reference() {
         let fast = measure_with(&r, &[&fwd], &tp, &cfg, surface, Locator::Fast).unwrap();
         let refr = measure_with(&r, &[&fwd], &tp, &cfg, surface, Locator::Reference).unwrap();
         assert!(fast.stats.crossed > 1000, "{:?}", fast.stats);
-        assert_same(&fast, &refr, &format!("dome zig-zag {surface:?}"));
+        if surface == SurfaceModel::Linear {
+            assert_same(&fast, &refr, &format!("dome zig-zag {surface:?}"));
+        } else {
+            // Every move translates: the fast measurement searches the moves' volumes
+            // directly, without the imprint surface, and must read what the reference reads
+            // through its crossings (a cap's reading comes from a move ending there).
+            assert_same_readings(&fast, &refr, &r, &tp, &ball, "dome zig-zag Exact");
+        }
     }
 
     let bull = Cutter::bull(38.0, 3.0).unwrap();
@@ -485,4 +563,69 @@ fn a_flat_bottom_through_the_vertex_reads_zero() {
         let s = m.deviations[0].signed_mm.unwrap();
         assert!(s.abs() < 1e-9, "{loc:?}: read {s}");
     }
+}
+
+/// A dense program read exactly: the feed moves of a bull-nose plan of mount_rush within
+/// 3 mm (in XY) of one design vertex, 2038 moves. Before the direct search of translation
+/// programs, the crossing locator overflowed on this vector (too many crossings within its
+/// window) and read −0.009746 mm from move 1353; the brute force over every move's puck and
+/// column says −0.010022 mm, from move 1476: a gouge deeper than τ = 0.01 along the normal,
+/// missed. The measurement must read the brute force.
+#[test]
+fn a_dense_program_is_read_exactly() {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/verify");
+    let tp = cam_gcode::read_gcode(
+        root.join("mount_rush_bull_dense.ngc"),
+        &cam_gcode::ReadConfig::default(),
+    )
+    .unwrap();
+    let bull = Cutter::bull(6.0, 1.5).unwrap();
+    let o = DVec3::new(-25.489606857299805, -2.1983015537261963, 1.3206899166107178);
+    let n = DVec3::new(0.6608251943731915, -0.2218887422182684, 0.7169905498389979).normalize();
+    let cfg = DeviationConfig::default();
+    let line = Line {
+        o,
+        n,
+        lo: -cfg.inside_mm,
+        hi: cfg.outside_mm,
+    };
+    let (mut brute, mut from) = (f64::INFINITY, 0);
+    for (i, w) in tp.moves.windows(2).enumerate() {
+        if w[1].kind == MoveKind::Rapid {
+            continue;
+        }
+        let g = MoveGeometry {
+            a: w[0].pose,
+            b: w[1].pose,
+            puck: Puck::of(&bull),
+        };
+        for e in [g.translation_entry(&line), g.column_entry(&line, false)]
+            .into_iter()
+            .flatten()
+        {
+            if e.normal.dot(n) < 0.0 && e.s < brute {
+                (brute, from) = (e.s, i + 1);
+            }
+        }
+    }
+    assert!(
+        brute < -0.01,
+        "the brute force reads {brute} from move {from}"
+    );
+    let r = RefinedMesh {
+        positions: vec![o],
+        normals: vec![n],
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 0.1,
+    };
+    let model = SweepModel::new(&tp, &bull, &SweepConfig::default());
+    let m = measure_with(&r, &[&model], &tp, &cfg, SurfaceModel::Exact, Locator::Fast).unwrap();
+    let got = m.deviations[0].signed_mm.unwrap();
+    assert!(
+        (got - brute).abs() <= 1e-9,
+        "read {got}, the brute force {brute} (move {from})"
+    );
+    assert_eq!(m.deviations[0].source_move, Some(from as u32));
 }
