@@ -307,13 +307,15 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     println!(
         "Stage timings are from the best verify run (Verification::timings): sweep = forward \
          and back-gouge sweep models (imprint curves), refine = design-surface refinement, \
-         measure = locating the normal vectors' crossings and refining them onto the exact \
-         swept volume; other = the rest (report)."
+         measure = each normal vector's first entry into the exact swept volume (for a \
+         program of translations, every plan here, a direct search over the moves' volumes; \
+         otherwise crossings of the imprint surface refined onto it), the material clip and \
+         crease depths; other = the rest (report)."
     );
     println!(
         "\nMeasure stage of the best run: strips and caps of the forward sweep (the back-gouge \
-         sweep holds rotating moves only), exact refinements (one per move or cap tried per \
-         vector) and vectors whose crossings could not be refined:\n\n{breakdown}"
+         sweep holds rotating moves only), exact refinements (exact entries tried: one per \
+         move, column or cap tried per vector) and vectors whose crossings could not be refined:\n\n{breakdown}"
     );
     Ok(())
 }
