@@ -14,27 +14,11 @@
 
 use cam_core::DVec3;
 
-use crate::exact::{Entry, Line};
+use crate::exact::{Entry, Line, quadratic_roots as roots};
 
 /// Relative slack (of the problem's size) allowed to the feasibility of a candidate: the
 /// candidates are computed boundary points, which rounding may put just outside.
 const FEAS_REL: f64 = 1e-9;
-
-/// The two roots of `qa·t² + 2·qb·t + qc = 0`, ordered, if real (`qa > 0`).
-fn roots(qa: f64, qb: f64, qc: f64) -> Option<(f64, f64)> {
-    let disc = qb * qb - qa * qc;
-    if disc.is_nan() || disc < 0.0 || qa <= 0.0 {
-        return None;
-    }
-    let sq = disc.sqrt();
-    let q = -qb - qb.signum() * sq;
-    let (r1, r2) = if q != 0.0 {
-        (q / qa, qc / q)
-    } else {
-        (0.0, 0.0)
-    };
-    Some((r1.min(r2), r1.max(r2)))
-}
 
 /// First entry of `line` into the half-infinite cylinder of radius `radius` about the axis
 /// `k` (unit) from base centre `c` upward (`(x − c)·k ≥ 0`): side, base disk, or `lo` (with

@@ -201,20 +201,26 @@ pub fn puck_entry(line: &Line, puck: &Puck, c: DVec3, k: DVec3) -> Option<Entry>
     first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
+/// The two roots of `qa·t² + 2·qb·t + qc = 0`, ordered, if real (`qa > 0`), computed
+/// without cancellation.
+pub(crate) fn quadratic_roots(qa: f64, qb: f64, qc: f64) -> Option<(f64, f64)> {
+    let disc = qb * qb - qa * qc;
+    if disc.is_nan() || disc < 0.0 || qa <= 0.0 {
+        return None;
+    }
+    let q = -qb - qb.signum() * disc.sqrt();
+    let (r1, r2) = if q != 0.0 {
+        (q / qa, qc / q)
+    } else {
+        (0.0, 0.0)
+    };
+    Some((r1.min(r2), r1.max(r2)))
+}
+
 /// The interval of `s` where `|o + s·n − c|² ≤ r²`, if any.
 fn sphere_interval(o: DVec3, n: DVec3, c: DVec3, r: f64) -> Option<(f64, f64)> {
     let m = o - c;
-    let b = m.dot(n);
-    let cc = m.length_squared() - r * r;
-    let disc = b * b - cc;
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let sq = disc.sqrt();
-    // Stable roots.
-    let q = -b - b.signum() * sq;
-    let (r1, r2) = if q != 0.0 { (q, cc / q) } else { (-b, -b) };
-    Some((r1.min(r2), r1.max(r2)))
+    quadratic_roots(1.0, m.dot(n), m.length_squared() - r * r)
 }
 
 /// First entry of `line` into the capsule of radius `r` about the segment `c0 c1` (a ball
@@ -430,23 +436,11 @@ pub fn translation_entry(
 /// The parameter interval where `|w0 + t·w1| ≤ a` (unbounded when `w1 = 0` and `|w0| ≤ a`).
 fn disk_interval(w0: DVec3, w1: DVec3, a: f64) -> Option<(f64, f64)> {
     let qa = w1.length_squared();
-    let qb = w0.dot(w1);
     let qc = w0.length_squared() - a * a;
     if qa == 0.0 {
         return (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY));
     }
-    let disc = qb * qb - qa * qc;
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    // Stable roots.
-    let q = -qb - qb.signum() * disc.sqrt();
-    let (r1, r2) = if q != 0.0 {
-        (q / qa, qc / q)
-    } else {
-        (0.0, 0.0)
-    };
-    Some((r1.min(r2), r1.max(r2)))
+    quadratic_roots(qa, w0.dot(w1), qc)
 }
 
 /// First entry of `line` into the disk of radius `a` (centre `c0`, axis `k`) swept along the

@@ -173,6 +173,13 @@ fn near_capsule(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) -> bool {
     (line.o + t * line.n).distance_squared(m) <= rho * rho * (1.0 + 1e-12)
 }
 
+/// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
+fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
+    if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
+        *found = Some((e, mv));
+    }
+}
+
 /// Vectors per tile of the direct search (see `measure_vectors`).
 const DIRECT_TILE: usize = 256;
 
@@ -958,11 +965,6 @@ fn measure_vectors(
     // whole.
     let column_entry =
         |line: &Line, hi: f64, found: &mut Option<(Entry, u32)>, tests: &mut usize| {
-            let take = |e: Entry, mv: u32, found: &mut Option<(Entry, u32)>| {
-                if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
-                    *found = Some((e, mv));
-                }
-            };
             let tie = 2e-9 * (1.0 + rr);
             let hi = found.map_or(hi, |(e, _)| e.s) - tie;
             columns.visit(line, hi, |ci, hi| {
@@ -980,7 +982,7 @@ fn measure_vectors(
                 };
                 match e {
                     Some(e) => {
-                        take(e, mv, found);
+                        take_least(e, mv, found);
                         hi.min(e.s - tie)
                     }
                     None => hi,
@@ -996,11 +998,6 @@ fn measure_vectors(
     // best found by more than rounding (see `tie`).
     let cutter_entry = |line: &Line, hi: f64, tests: &mut usize| -> Option<(Entry, u32)> {
         let mut found: Option<(Entry, u32)> = None;
-        let take = |e: Entry, mv: u32, found: &mut Option<(Entry, u32)>| {
-            if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
-                *found = Some((e, mv));
-            }
-        };
         let start = line.o + line.lo * line.n;
         pucks.visit(line, line.lo, |ci, hi| {
             let mv = pucks.items[ci].1;
@@ -1016,7 +1013,7 @@ fn measure_vectors(
                     s: line.lo,
                     normal: -line.n,
                 };
-                take(e, mv, &mut found);
+                take_least(e, mv, &mut found);
             }
             hi
         });
@@ -1036,9 +1033,9 @@ fn measure_vectors(
         let first = axes.next();
         first.filter(|&k| axes.all(|a| a == k))
     };
+    let axis_of = |mv: u32| common_axis.unwrap_or_else(|| toolpath.moves[mv as usize].pose.axis);
     let entry_of = |line: &Line, mv: u32, c0: DVec3, c1: DVec3| {
-        let k = common_axis.unwrap_or_else(|| toolpath.moves[mv as usize].pose.axis);
-        crate::exact::translation_entry(line, &puck, c0, c1, k)
+        crate::exact::translation_entry(line, &puck, c0, c1, axis_of(mv))
     };
     let seed_of = |mv: u32| {
         let (a, b) = (
@@ -1047,102 +1044,103 @@ fn measure_vectors(
         );
         Some((mv, a.tip + puck.r * a.axis, b.tip + puck.r * b.axis))
     };
-    let direct_one = |v: &Vector, seed: Option<(u32, DVec3, DVec3)>| -> PerVector {
-        let mut stats = [0usize; 5];
-        let line = Line {
-            o: v.o,
-            n: v.n,
-            lo: v.lo,
-            hi: v.hi,
-        };
-        let mut found: Option<(Entry, u32)> = None;
-        // The move that cut the previous vector (a neighbour): its entry, if any, bounds the
-        // search from the start. It is met again in the tree and changes nothing there.
-        if let Some((mv, c0, c1)) = seed {
-            stats[1] += 1;
-            found = entry_of(&line, mv, c0, c1)
-                .filter(|e| facing_ok(e.normal.dot(v.n)))
-                .map(|e| (e, mv));
-        }
-        let mut try_move = |ci: usize, found: &mut Option<(Entry, u32)>| {
-            let (_, mv, c0, c1) = volumes.items[ci];
-            let seg = Line {
-                hi: found.map_or(v.hi, |(f, _)| f.s),
-                ..line
+    let direct_one =
+        |v: &Vector, seed: Option<(u32, DVec3, DVec3)>, queue: &mut Vec<(f64, u32)>| -> PerVector {
+            let mut stats = [0usize; 5];
+            let line = Line {
+                o: v.o,
+                n: v.n,
+                lo: v.lo,
+                hi: v.hi,
             };
-            if !near_capsule(&line, seg.hi, c0, c1, rr) {
-                return;
+            let mut found: Option<(Entry, u32)> = None;
+            // The move that cut the previous vector (a neighbour): its entry, if any, bounds the
+            // search from the start. It is met again in the tree and changes nothing there.
+            if let Some((mv, c0, c1)) = seed {
+                stats[1] += 1;
+                found = entry_of(&line, mv, c0, c1)
+                    .filter(|e| facing_ok(e.normal.dot(v.n)))
+                    .map(|e| (e, mv));
             }
-            stats[1] += 1;
-            if let Some(e) = entry_of(&seg, mv, c0, c1)
-                && facing_ok(e.normal.dot(v.n))
-                && found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm))
-            {
-                *found = Some((e, mv));
-            }
-        };
-        let hi0 = found.map_or(v.hi, |(f, _)| f.s);
-        if puck.a > 0.0 && puck.r > 0.0 {
-            // A bull's entry costs a Newton search: the moves whose capsule of radius
-            // `a + r` (which holds the puck: its entry is a lower bound) the segment enters,
-            // in the order of those bounds, until a bound lies beyond the best entry.
-            let mut queue: Vec<(f64, u32)> = Vec::new();
-            volumes.visit(&line, hi0, |ci, hi| {
+            let mut try_move = |ci: usize, found: &mut Option<(Entry, u32)>| {
                 let (_, mv, c0, c1) = volumes.items[ci];
-                if !near_capsule(&line, hi, c0, c1, rr) {
-                    return hi;
-                }
-                let k = common_axis.unwrap_or_else(|| toolpath.moves[mv as usize].pose.axis);
-                // The puck also lies in the slab `r` either side of the centres along `k`.
-                let Some((s0, s1)) = slab_interval(&line, k, c0.dot(k), c1.dot(k), puck.r) else {
-                    return hi;
-                };
                 let seg = Line {
-                    lo: line.lo.max(s0),
-                    hi: hi.min(s1),
+                    hi: found.map_or(v.hi, |(f, _)| f.s),
                     ..line
                 };
-                if seg.lo > seg.hi {
-                    return hi;
+                stats[1] += 1;
+                if let Some(e) = entry_of(&seg, mv, c0, c1)
+                    && facing_ok(e.normal.dot(v.n))
+                {
+                    take_least(e, mv, found);
                 }
-                if let Some(b) = crate::exact::capsule_entry(&seg, c0, c1, rr) {
-                    queue.push((b.s, ci as u32));
+            };
+            let hi0 = found.map_or(v.hi, |(f, _)| f.s);
+            if puck.a > 0.0 && puck.r > 0.0 {
+                // A bull's entry costs a Newton search: the moves whose capsule of radius
+                // `a + r` (which holds the puck: its entry is a lower bound) the segment enters,
+                // in the order of those bounds, until a bound lies beyond the best entry.
+                queue.clear();
+                volumes.visit(&line, hi0, |ci, hi| {
+                    let (_, mv, c0, c1) = volumes.items[ci];
+                    if !near_capsule(&line, hi, c0, c1, rr) {
+                        return hi;
+                    }
+                    let k = axis_of(mv);
+                    // The puck also lies in the slab `r` either side of the centres along `k`.
+                    let Some((s0, s1)) = slab_interval(&line, k, c0.dot(k), c1.dot(k), puck.r)
+                    else {
+                        return hi;
+                    };
+                    let seg = Line {
+                        lo: line.lo.max(s0),
+                        hi: hi.min(s1),
+                        ..line
+                    };
+                    if seg.lo > seg.hi {
+                        return hi;
+                    }
+                    if let Some(b) = crate::exact::capsule_entry(&seg, c0, c1, rr) {
+                        queue.push((b.s, ci as u32));
+                    }
+                    hi
+                });
+                queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+                for &(bound, ci) in queue.iter() {
+                    if found.is_some_and(|(f, _)| bound > f.s) {
+                        break;
+                    }
+                    try_move(ci as usize, &mut found);
                 }
-                hi
-            });
-            queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-            for (bound, ci) in queue {
-                if found.is_some_and(|(f, _)| bound > f.s) {
-                    break;
-                }
-                try_move(ci as usize, &mut found);
+            } else {
+                volumes.visit(&line, hi0, |ci, hi| {
+                    let (_, _, c0, c1) = volumes.items[ci];
+                    if near_capsule(&line, hi, c0, c1, rr) {
+                        try_move(ci, &mut found);
+                    }
+                    found.map_or(hi, |(f, _)| f.s.min(hi))
+                });
             }
-        } else {
-            volumes.visit(&line, hi0, |ci, hi| {
-                try_move(ci, &mut found);
-                found.map_or(hi, |(f, _)| f.s.min(hi))
-            });
-        }
-        column_entry(&line, v.hi, &mut found, &mut stats[1]);
-        let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
+            column_entry(&line, v.hi, &mut found, &mut stats[1]);
+            let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
+                let dev = Deviation {
+                    position: v.o,
+                    normal: v.n,
+                    signed_mm: None,
+                    source_move: None,
+                };
+                return (dev, 0.0, None, None, stats);
+            };
+            stats[0] = 1;
+            stats[2] = 1;
             let dev = Deviation {
                 position: v.o,
                 normal: v.n,
-                signed_mm: None,
-                source_move: None,
+                signed_mm: Some(e.s),
+                source_move: Some(mv),
             };
-            return (dev, 0.0, None, None, stats);
+            (dev, e.normal.dot(v.n), None, Some(Source::Move(mv)), stats)
         };
-        stats[0] = 1;
-        stats[2] = 1;
-        let dev = Deviation {
-            position: v.o,
-            normal: v.n,
-            signed_mm: Some(e.s),
-            source_move: Some(mv),
-        };
-        (dev, e.normal.dot(v.n), None, Some(Source::Move(mv)), stats)
-    };
     let move_of = |c: &Crossing| {
         let (piece, _) = unkey(c.key);
         models[c.model as usize].pieces[piece].source_move()
@@ -1406,40 +1404,23 @@ fn measure_vectors(
             let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
             let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
             order.sort_unstable();
-            let tiles: Vec<Vec<(u32, PerVector)>> = order
+            let mut done: Vec<(u32, PerVector)> = order
                 .par_chunks(DIRECT_TILE)
-                .map(|tile| {
-                    let mut seed = None;
+                .flat_map_iter(|tile| {
+                    let (mut seed, mut queue) = (None, Vec::new());
                     tile.iter()
                         .map(|&(_, i)| {
-                            let r = direct_one(&chunk[i as usize], seed);
+                            let r = direct_one(&chunk[i as usize], seed, &mut queue);
                             if let Some(mv) = r.0.source_move {
                                 seed = seed_of(mv);
                             }
                             (i, r)
                         })
-                        .collect()
+                        .collect::<Vec<_>>()
                 })
                 .collect();
-            let base = per.len();
-            per.extend(std::iter::repeat_n(
-                (
-                    Deviation {
-                        position: DVec3::ZERO,
-                        normal: DVec3::ZERO,
-                        signed_mm: None,
-                        source_move: None,
-                    },
-                    0.0,
-                    None,
-                    None,
-                    [0; 5],
-                ),
-                chunk.len(),
-            ));
-            for (i, r) in tiles.into_iter().flatten() {
-                per[base + i as usize] = r;
-            }
+            done.sort_unstable_by_key(|&(i, _)| i);
+            per.extend(done.into_iter().map(|(_, r)| r));
         } else {
             let found = find(chunk);
             per.par_extend(chunk.par_iter().zip(found.par_iter()).map(one));
