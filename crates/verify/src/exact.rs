@@ -612,6 +612,10 @@ impl MoveGeometry {
     /// `[u_lo, u_hi]`; exact where the entry is unimodal in `u` there.
     pub fn entry_min_over(&self, line: &Line, u_lo: f64, u_hi: f64) -> Option<(Entry, f64)> {
         const G: f64 = 0.618_033_988_749_894_9;
+        // A line that misses a superset of these pucks enters none of them.
+        if !self.puck_hull_met(line, u_lo, u_hi) {
+            return None;
+        }
         let val = |u: f64| self.entry_at(line, u);
         let key = |e: &Option<Entry>| e.map_or(f64::INFINITY, |e| e.s);
         let (mut lo, mut hi) = (u_lo, u_hi);
@@ -682,9 +686,6 @@ impl MoveGeometry {
         if self.puck.r == 0.0 {
             return false;
         }
-        if !self.is_translation() {
-            return self.depth_at(p) > 0.0;
-        }
         let (c0, k) = self.centre_axis(0.0);
         let (c1, _) = self.centre_axis(1.0);
         let d = c1 - c0;
@@ -694,6 +695,16 @@ impl MoveGeometry {
             0.0
         };
         let dist = p.distance(c0 + t * d);
+        if !self.is_translation() {
+            // Every pose's puck lies in the ball of radius a + r about its centre, which
+            // strays from the chord by at most the centre's sag; and in the cylinder about
+            // its axis, radius a + r and half-height r (see `puck_hull_holds`).
+            let reach = self.puck.a + self.puck.r + self.centre_sag();
+            if dist > reach * (1.0 + 1e-12) + 1e-12 || !self.puck_hull_holds(p) {
+                return false;
+            }
+            return self.depth_at(p) > 0.0;
+        }
         if self.puck.a == 0.0 {
             // A ball's swept puck is the capsule about the centre's segment.
             return dist < self.puck.r;
@@ -705,6 +716,130 @@ impl MoveGeometry {
             return false;
         }
         self.depth_at(p) > 0.0
+    }
+
+    /// How far (mm) the torus centre strays from its chord `c(0) → c(1)` along the move:
+    /// at most `r·(1 − cos(θ/2))` for an axis turn `θ`, since the tip runs on its chord and
+    /// the interpolated axis (a normalised linear blend, [`crate::model::interpolate`]) differs
+    /// from the linear blend by `1 − |blend| ≤ 1 − cos(θ/2)`. 0 for a translation.
+    pub fn centre_sag(&self) -> f64 {
+        if self.is_translation() {
+            return 0.0;
+        }
+        self.puck.r * (1.0 - self.half_turn().1)
+    }
+
+    /// `(sin(θ/2), cos(θ/2))` of the axis turn `θ` over the move, from the chords of the
+    /// unit axes (`|k1 − k0| = 2·sin(θ/2)`, `|k0 + k1| = 2·cos(θ/2)`).
+    fn half_turn(&self) -> (f64, f64) {
+        let (k0, k1) = (self.a.axis.normalize(), self.b.axis.normalize());
+        (0.5 * (k1 - k0).length(), 0.5 * (k0 + k1).length())
+    }
+
+    /// A superset of the pucks of the poses `u ∈ [u_lo, u_hi]`: the cylinder of radius
+    /// `a + r + δ + r·sin(θ/2)` and half-height `r + δ + (a + r)·sin(θ/2)` about the mean
+    /// axis `k̄`, swept along the centre's chord from `c_lin(u_lo)` to `c_lin(u_hi)` (each
+    /// pose's puck lies in the cylinder of radius `a + r`, half-height `r` about its own
+    /// centre and axis; see [`MoveGeometry::column_hull_entry`] for the margins). Returns
+    /// whether `line` may enter it: false only when it misses one of the two columns whose
+    /// intersection holds it.
+    pub fn puck_hull_met(&self, line: &Line, u_lo: f64, u_hi: f64) -> bool {
+        let (c0, k0) = self.centre_axis(0.0);
+        let (c1, k1) = self.centre_axis(1.0);
+        let km = (k0 + k1).normalize_or_zero();
+        if km == DVec3::ZERO {
+            return true;
+        }
+        let (a, r) = (self.puck.a, self.puck.r);
+        let (sag, sh) = (self.centre_sag(), self.half_turn().0);
+        let pad = 1e-9 * (1.0 + a + r + c0.abs().max(c1.abs()).max_element());
+        let radius = a + r + sag + r * sh + pad;
+        let half = r + sag + (a + r) * sh + pad;
+        let (p0, p1) = (c0.lerp(c1, u_lo), c0.lerp(c1, u_hi));
+        let up = crate::column::column_translation_entry;
+        up(line, p0 - half * km, p1 - half * km, km, radius, true).is_some()
+            && up(line, p0 + half * km, p1 + half * km, -km, radius, true).is_some()
+    }
+
+    /// Whether `p` lies in a superset of the puck swept along a rotating move: each pose's
+    /// puck lies in the cylinder of radius `a + r` and half-height `r` about its centre and
+    /// axis, so (as in [`MoveGeometry::column_hull_entry`]) in the cylinder about the mean
+    /// axis `k̄` and the chord's point `c_lin(u)` grown in radius by `δ + r·sin(θ/2)` and in
+    /// half-height by `δ + (a + r)·sin(θ/2)`; `p` must lie in it for some `u ∈ [0, 1]`.
+    pub fn puck_hull_holds(&self, p: DVec3) -> bool {
+        let (c0, k0) = self.centre_axis(0.0);
+        let (c1, k1) = self.centre_axis(1.0);
+        let km = (k0 + k1).normalize_or_zero();
+        if km == DVec3::ZERO {
+            return true;
+        }
+        let (a, r) = (self.puck.a, self.puck.r);
+        let (sag, sh) = (self.centre_sag(), self.half_turn().0);
+        let pad = 1e-9 * (1.0 + a + r);
+        let radius = a + r + sag + r * sh + pad;
+        let half = r + sag + (a + r) * sh + pad;
+        // q(u) = p − c0 − u·d: axial part linear in u, radial part a convex quadratic.
+        let (q, d) = (p - c0, c1 - c0);
+        let (qk, dk) = (q.dot(km), d.dot(km));
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        if dk.abs() > 0.0 {
+            let (u1, u2) = ((qk - half) / dk, (qk + half) / dk);
+            lo = lo.max(u1.min(u2));
+            hi = hi.min(u1.max(u2));
+        } else if qk.abs() > half {
+            return false;
+        }
+        if lo > hi {
+            return false;
+        }
+        let (qp, dp) = (q - qk * km, d - dk * km);
+        let dd = dp.length_squared();
+        let u = if dd > 0.0 {
+            (qp.dot(dp) / dd).clamp(lo, hi)
+        } else {
+            lo
+        };
+        (qp - u * dp).length_squared() <= radius * radius
+    }
+
+    /// First entry of `line` into a superset of the column swept along the move (bases
+    /// included), in closed form: a lower bound of every entry into one of the move's
+    /// columns, `None` when the line meets none of them. A translation's swept column itself;
+    /// for a rotating move the translation column along the centre's chord about the mean
+    /// axis `k̄` (the normalised sum of the end axes, within `θ/2` of every pose's axis),
+    /// grown in radius by `δ + H·sin(θ/2)` and lowered by `δ + (a + r)·sin(θ/2)`, where `δ`
+    /// is the centre's sag ([`MoveGeometry::centre_sag`]) and `H` bounds the distance from
+    /// the line's segment to the centres. (A point `c(u) + h·k(u) + w` of a pose's column,
+    /// `h ≥ 0`, `|w| ≤ a + r`, `h ≤ H`, lies within `δ + h·sin(θ/2) + |w|` of the chord's
+    /// axis line through `c_lin(u)` and at least `−δ − |w|·sin(θ/2)` along `k̄` from it.)
+    pub fn column_hull_entry(&self, line: &Line) -> Option<Entry> {
+        let rr = self.puck.a + self.puck.r;
+        let (c0, k0) = self.centre_axis(0.0);
+        let (c1, k1) = self.centre_axis(1.0);
+        let everywhere = Some(Entry {
+            s: line.lo,
+            normal: -line.n,
+        });
+        if self.is_translation() {
+            return crate::column::column_translation_entry(line, c0, c1, k0, rr, true);
+        }
+        let km = (k0 + k1).normalize_or_zero();
+        let ends = [line.at(line.lo), line.at(line.hi)];
+        let sag = self.centre_sag();
+        let far = ends
+            .iter()
+            .flat_map(|e| [e.distance(c0), e.distance(c1)])
+            .fold(0.0, f64::max)
+            + sag;
+        if km == DVec3::ZERO || !far.is_finite() {
+            return everywhere;
+        }
+        let sh = self.half_turn().0;
+        // A relative pad for rounding.
+        let pad = 1e-9 * (1.0 + rr + far);
+        let grow = sag + far * sh + pad;
+        let lower = (sag + rr * sh + pad) * km;
+        crate::column::column_translation_entry(line, c0 - lower, c1 - lower, km, rr + grow, true)
     }
 
     /// First entry of `line` into the cutter's column ([`crate::column`]: the cylinder of

@@ -978,7 +978,11 @@ fn measure_vectors(
                 let e = if a.axis == b.axis {
                     crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
                 } else {
-                    rf.geometry(mv).and_then(|g| g.column_entry(&seg, false))
+                    // The closed-form hull first: most lines pass clear of a rotating
+                    // move's columns, whose search costs some 90 poses.
+                    rf.geometry(mv)
+                        .filter(|g| g.column_hull_entry(&seg).is_some())
+                        .and_then(|g| g.column_entry(&seg, false))
                 };
                 match e {
                     Some(e) => {

@@ -558,3 +558,87 @@ fn rotating_column_entry_matches_instances() {
         "the search read {worst_above} mm after the instances"
     );
 }
+
+/// The closed-form hulls that let the measurement skip a rotating move (its column's, its
+/// pucks' over a range of poses, and the point test of its pucks) hold every pose: against
+/// 1000 poses of each of 300 random rotating moves (axis turns up to 60°), a pose's column
+/// entered (base included) means the hull's entry exists and is no later; a pose's puck
+/// entered within a range of poses means the range's hull is met; a point inside a pose's
+/// puck lies in the point hull. The hulls must also reject: most random lines and points
+/// are far from the move, and a hull that rejects nothing would pass the first checks.
+#[test]
+fn rotating_hulls_hold_every_pose() {
+    use cam_core::Pose;
+    use cam_verify::exact::MoveGeometry;
+    let mut g = Lcg(23);
+    let (mut entered, mut held) = (0usize, 0usize);
+    let (mut column_skips, mut puck_skips, mut point_skips) = (0usize, 0usize, 0usize);
+    for case in 0..300 {
+        let k0 = (DVec3::Z + 0.3 * g.unit()).normalize();
+        let turn = g.range(0.01, 1.0);
+        let k1 = (k0 + turn * g.unit()).normalize();
+        let t0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
+        let t1 = t0 + g.unit() * g.range(0.1, 4.0);
+        let (a, r) = (g.range(0.0, 3.0), g.range(0.05, 2.0));
+        let geo = MoveGeometry {
+            a: Pose { tip: t0, axis: k0 },
+            b: Pose { tip: t1, axis: k1 },
+            puck: Puck { a, r },
+        };
+        let o = DVec3::new(g.range(-9.0, 9.0), g.range(-9.0, 9.0), g.range(-9.0, 9.0));
+        let aim = t0.lerp(t1, g.next()) + g.unit() * g.range(0.0, 2.0 * (a + r));
+        let line = Line {
+            o,
+            n: (aim - o).normalize_or(DVec3::X),
+            lo: g.range(0.0, 4.0),
+            hi: g.range(5.0, 18.0),
+        };
+        let (u_lo, u_hi) = {
+            let (x, y) = (g.next(), g.next());
+            (x.min(y), x.max(y))
+        };
+        let hull = geo.column_hull_entry(&line);
+        let met = geo.puck_hull_met(&line, u_lo, u_hi);
+        column_skips += usize::from(hull.is_none());
+        puck_skips += usize::from(!met);
+        let poses = 1000;
+        for i in 0..=poses {
+            let u = i as f64 / poses as f64;
+            let (c, k) = geo.centre_axis(u);
+            if let Some(e) = column_entry(&line, c, k, a + r, true) {
+                entered += 1;
+                let h = hull.unwrap_or_else(|| panic!("case {case}: pose {u} entered, no hull"));
+                assert!(
+                    h.s <= e.s + 1e-12,
+                    "case {case}: hull {} after pose {}",
+                    h.s,
+                    e.s
+                );
+            }
+            let uu = u_lo + (u_hi - u_lo) * u;
+            let (c, k) = geo.centre_axis(uu);
+            if puck_entry(&line, &geo.puck, c, k).is_some() {
+                assert!(met, "case {case}: pose {uu} puck entered, hull missed");
+            }
+            // A point of this pose's puck: its centre's disk grown by up to r.
+            let e1 = cam_verify::imprint::any_perpendicular(k);
+            let e2 = k.cross(e1);
+            let ang = g.range(0.0, std::f64::consts::TAU);
+            let w = (ang.cos() * e1 + ang.sin() * e2) * g.range(0.0, a);
+            let p = c + w + g.unit() * g.range(0.0, 0.999 * r);
+            assert!(
+                geo.puck_hull_holds(p),
+                "case {case}: pose {uu} point outside the hull"
+            );
+            held += 1;
+            let q = DVec3::new(g.range(-9.0, 9.0), g.range(-9.0, 9.0), g.range(-9.0, 9.0));
+            point_skips += usize::from(!geo.puck_hull_holds(q));
+        }
+    }
+    println!(
+        "rotating hulls: {entered} pose columns entered, {held} puck points held; rejected \
+         {column_skips}/300 columns, {puck_skips}/300 puck ranges, {point_skips}/300300 points"
+    );
+    assert!(entered > 10_000 && held == 300 * 1001, "{entered} {held}");
+    assert!(column_skips > 30 && puck_skips > 60 && point_skips > 150_000);
+}
