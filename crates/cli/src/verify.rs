@@ -23,7 +23,10 @@ pub struct VerifyOpts {
     /// of sqrt(6·r·e).
     #[arg(long, default_value_t = 0.005)]
     pub resolution: f64,
-    /// Do not sweep the path in reverse to look for back gouges.
+    /// Do not sweep the path in reverse (the other half of the tool). Programs of
+    /// translations are read exactly either way; on rotating (5-axis) moves, and with
+    /// `--surface linear`, the half the forward sweep does not imprint (back gouges, and
+    /// under rotation also part of the cut) then goes unmeasured.
     #[arg(long)]
     pub no_back_gouge: bool,
     /// Swept surface measured against: `exact` refines every crossing of the imprint

@@ -565,6 +565,10 @@ pub fn convex_translation_entry(
     first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
+/// Poses sampled evenly by [`MoveGeometry::entry_min_over`] before its golden-section
+/// search.
+pub const ENTRY_SAMPLES: usize = 16;
+
 /// A toolpath move as the refinement sees it: tip and axis at both ends, cutter radii.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MoveGeometry {
@@ -607,18 +611,24 @@ impl MoveGeometry {
         puck_entry(line, &self.puck, c, k)
     }
 
-    /// First entry into the union of pucks for `u ∈ [u_lo, u_hi]` by golden-section search
-    /// over `u` of [`MoveGeometry::entry_at`] (misses count as `+∞`), starting bracket
-    /// `[u_lo, u_hi]`; exact where the entry is unimodal in `u` there.
+    /// First entry into the union of pucks for `u ∈ [u_lo, u_hi]` (`None` when it is not
+    /// below `line.hi`): the least of [`MoveGeometry::entry_at`] over `u`, searched on the
+    /// line extended by `a + r` beyond `line.hi` (so that poses entered just after `hi` still
+    /// guide the search towards one entered before it): [`ENTRY_SAMPLES`] poses evenly over the
+    /// range, then golden-section search in the two intervals about the least sample. Exact
+    /// where the entry is unimodal in `u` on that bracket; misses count as `+∞`.
     pub fn entry_min_over(&self, line: &Line, u_lo: f64, u_hi: f64) -> Option<(Entry, f64)> {
         const G: f64 = 0.618_033_988_749_894_9;
         // A line that misses a superset of these pucks enters none of them.
         if !self.puck_hull_met(line, u_lo, u_hi) {
             return None;
         }
-        let val = |u: f64| self.entry_at(line, u);
+        let long = Line {
+            hi: line.hi + self.puck.a + self.puck.r,
+            ..*line
+        };
+        let val = |u: f64| self.entry_at(&long, u);
         let key = |e: &Option<Entry>| e.map_or(f64::INFINITY, |e| e.s);
-        let (mut lo, mut hi) = (u_lo, u_hi);
         let mut best: Option<(Entry, f64)> = None;
         let consider = |e: Option<Entry>, u: f64, best: &mut Option<(Entry, f64)>| {
             if let Some(e) = e
@@ -627,8 +637,17 @@ impl MoveGeometry {
                 *best = Some((e, u));
             }
         };
-        consider(val(lo), lo, &mut best);
-        consider(val(hi), hi, &mut best);
+        let n = ENTRY_SAMPLES;
+        let at = |i: usize| u_lo + (u_hi - u_lo) * i as f64 / n as f64;
+        let mut least = 0;
+        for i in 0..=n {
+            let e = val(at(i));
+            if key(&e) < best.map_or(f64::INFINITY, |(b, _)| b.s) {
+                least = i;
+            }
+            consider(e, at(i), &mut best);
+        }
+        let (mut lo, mut hi) = (at(least.saturating_sub(1)), at((least + 1).min(n)));
         let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
         let (mut e1, mut e2) = (val(x1), val(x2));
         for _ in 0..90 {
@@ -651,7 +670,7 @@ impl MoveGeometry {
         }
         consider(e1, x1, &mut best);
         consider(e2, x2, &mut best);
-        best
+        best.filter(|(e, _)| e.s <= line.hi)
     }
 
     /// How deep `p` lies inside the puck swept along the move (mm, 0 outside): `r` minus its

@@ -38,7 +38,10 @@
 //! turn with the demarcation from pose to pose (each insert's `ΔT` is still that of the same
 //! material section, through the transported frames), which keeps the `Q/2 + 1` points of
 //! neighbouring curves in correspondence from the demarcation on, as §3.3 asks.
-//! [`Half::Complement`] takes the other half, used for back-gouge sweeps.
+//! [`Half::Complement`] takes the other half, used for back-gouge sweeps, which run the path
+//! backwards: the half opposite to the one the forward sweep takes at the same pose (its
+//! choice made on the negated motion), so that together they cover the whole tool also
+//! where, under rotation, `σ` would come out the same both ways.
 //!
 //! # Insert placement and motion direction (beyond the paper, both switchable)
 //! Near a demarcation the imprint curve climbs from the bottom of the insert to its side point
@@ -201,7 +204,8 @@ pub enum Side {
 pub enum Half {
     /// The half centred on `σ·h` whose Eq. 2 solutions lie on the cutting quarter.
     Cutting,
-    /// The other half (for back-gouge sweeps).
+    /// For a sweep of the path backwards (back gouges): the half opposite to the one
+    /// [`Half::Cutting`] takes at the same pose of the forward path.
     Complement,
 }
 
@@ -528,8 +532,13 @@ impl Imprinter {
             let v = dt.dot(k);
             (v, v.abs() / (dt - v * k).length().max(1e-300))
         };
-        let (mut front, slope) = if axial {
-            (e.e1, f64::INFINITY)
+        let (front, slope) = if axial {
+            let front = if half == Half::Complement {
+                -e.e1
+            } else {
+                e.e1
+            };
+            (front, f64::INFINITY)
         } else {
             // σ: the half whose middle insert moves up (relative to the tool) along with its
             // forward motion; for a translation sign(ΔC·k); under rotation the middle insert's
@@ -538,15 +547,19 @@ impl Imprinter {
             let (vf, sf) = slope_of(insert_motion(f));
             let (vb, sb) = slope_of(insert_motion(-f));
             let eps = 1e-12 * dcl.max(rotation);
-            if vf >= -eps || vb > eps {
-                (f, sf)
-            } else {
-                (-f, sb)
-            }
+            let cutting = |vf: f64, vb: f64| vf >= -eps || vb > eps;
+            // The complement (a back-gouge sweep, which takes the path backwards and so sees
+            // every motion negated) is the other half of the one the forward sweep imprints:
+            // the forward choice is made with the inserts' roles swapped and their motions
+            // negated. (Taking the complement of this sweep's own choice is the same for a
+            // translation, but under rotation, with the insert at +ĥ rising and the one at −ĥ
+            // sinking, both sweeps would imprint the +ĥ half and leave the other uncovered.)
+            let plus = match half {
+                Half::Cutting => cutting(vf, vb),
+                Half::Complement => cutting(-vb, -vf),
+            };
+            if plus { (f, sf) } else { (-f, sb) }
         };
-        if half == Half::Complement {
-            front = -front;
-        }
         let g1 = front.cross(k);
         let g2 = front;
         let (alpha, beta) = (g1.dot(e.e1), g1.dot(e.e2));

@@ -147,6 +147,10 @@ fn source_geometry(
 /// Progress callback: `(vectors done, vectors in all)`; called between chunks.
 pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
+/// How deep (mm) a refined point may lie inside another pose's puck of its own move and
+/// still count as the move's entry (rounding of the Newton solve and the pose search).
+const FOLD_MM: f64 = 1e-9;
+
 /// Vectors located and refined per chunk (progress is reported between chunks).
 const MEASURE_CHUNK: usize = 1 << 17;
 
@@ -372,9 +376,20 @@ impl Refiner<'_> {
                 frame as usize + 1
             }
         };
-        let own = guess
+        // Newton's point is where the line crosses one pose's characteristic sheet. Under
+        // rotation a sheet can fold inside the move's volume (inserts of the complement half
+        // that do not all cut): a point deeper than `FOLD_MM` inside another pose's puck is
+        // not the entry, and the poses are searched.
+        let own = match guess
             .and_then(|(u, psi)| g.imprint_entry(line, &body_at(frame as usize), [u, psi, c.s]))
-            .or_else(|| g.entry_min_over(line, lo, hi));
+        {
+            Some((e, u)) if g.depth_at(line.o + e.s * line.n) <= FOLD_MM => Some((e, u)),
+            Some((e, u)) => match g.entry_min_over(line, 0.0, 1.0) {
+                Some((m, mu)) if m.s < e.s => Some((m, mu)),
+                _ => Some((e, u)),
+            },
+            None => g.entry_min_over(line, lo, hi),
+        };
         // Near a move end (the step's own or the solution's), the neighbouring move and the
         // tool at the joint.
         let u_sol = own.map_or(0.5 * (u0 + u1), |(_, u)| u);

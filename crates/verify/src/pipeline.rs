@@ -542,6 +542,7 @@ pub fn verify_with_progress(
         "kept_linear_vectors".to_string(),
         m.stats.kept_linear as f64,
     );
+    extra.insert("overflow_vectors".to_string(), m.stats.overflow as f64);
     extra.insert(
         "back_gouge".to_string(),
         if cfg.back_gouge { 1.0 } else { 0.0 },

@@ -5,7 +5,7 @@
 //! Each pose touches the surface at the pass point `S(u, v₀)`: the point of the cutter whose
 //! outward normal is `−N` is placed on `S` (for a bull or ball cutter on its corner torus).
 
-use cam_core::{Cutter, DVec3, Move, MoveKind, Pose, Toolpath};
+use cam_core::{Cutter, DVec3, Move, MoveKind, Pose, Toolpath, Triangle};
 
 /// An analytic surface `S(u, v)` with unit normal `N` (pointing away from the material).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -132,6 +132,61 @@ pub fn pass(spec: &PassSpec, cutter: &Cutter) -> Toolpath {
         })
         .collect();
     Toolpath { moves }
+}
+
+/// A zig-zag of `passes` passes like `spec` at `v = spec.v_mm + i·stepover_mm`, every
+/// other one run backwards, each opened by a rapid to its first pose (pass `i` numbered
+/// `i`): a multi-pass 5-axis program whose neighbouring passes overlap when the stepover is
+/// below the cutter's diameter.
+pub fn zigzag(spec: &PassSpec, passes: usize, stepover_mm: f64, cutter: &Cutter) -> Toolpath {
+    let mut moves = Vec::new();
+    for i in 0..passes {
+        let one = PassSpec {
+            v_mm: spec.v_mm + i as f64 * stepover_mm,
+            ..*spec
+        };
+        let mut p = pass(&one, cutter).moves;
+        if i % 2 == 1 {
+            p.reverse();
+        }
+        for (j, m) in p.iter_mut().enumerate() {
+            m.kind = if j == 0 {
+                MoveKind::Rapid
+            } else {
+                MoveKind::Cut
+            };
+            m.pass = Some(i);
+        }
+        moves.extend(p);
+    }
+    Toolpath { moves }
+}
+
+/// The surface over `u_range × v_range` (mm) as `nu × nv` grid cells of two triangles
+/// each, counter-clockwise seen from `+N` (an open sheet: the design surface of the
+/// generated programs).
+pub fn surface_triangles(
+    surface: &TestSurface,
+    u_range: (f64, f64),
+    v_range: (f64, f64),
+    nu: usize,
+    nv: usize,
+) -> Vec<Triangle> {
+    let (nu, nv) = (nu.max(1), nv.max(1));
+    let at = |i: usize, j: usize| {
+        let u = u_range.0 + (u_range.1 - u_range.0) * i as f64 / nu as f64;
+        let v = v_range.0 + (v_range.1 - v_range.0) * j as f64 / nv as f64;
+        surface.eval(u, v).0
+    };
+    let mut out = Vec::with_capacity(2 * nu * nv);
+    for j in 0..nv {
+        for i in 0..nu {
+            let (p00, p10, p11, p01) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            out.push(Triangle::new(p00, p10, p11));
+            out.push(Triangle::new(p00, p11, p01));
+        }
+    }
+    out
 }
 
 /// A two-pose 3-axis path: rapid to `a`, cut to `b` (tool tips, axis +Z).
