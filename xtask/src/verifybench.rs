@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::{Context, Result};
 use cam_core::{Cutter, DVec3, MoveKind, Pose, Toolpath};
 use cam_verify::imprint::{Half, ImprintConfig, Imprinter, Placement, transport_frames};
-use cam_verify::testpaths::{PassSpec, TestSurface, pass};
+use cam_verify::testpaths::{PassSpec, TestSurface, pass, surface_triangles, zigzag};
 use cam_verify::{VerifyConfig, verify};
 
 use crate::planbench::{self, PlanBenchConfig, best_of};
@@ -317,12 +317,94 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
          sweep holds rotating moves only), exact refinements (exact entries tried: one per \
          move, column or cap tried per vector) and vectors whose crossings could not be refined:\n\n{breakdown}"
     );
+    five_axis_bench(pc.runs)?;
+    Ok(())
+}
+
+/// A 5-axis zig-zag and its design surface: 13 passes 2 mm apart over the twisted blade
+/// (`testpaths`, twist 0.01 rad/mm, u in [-30, 30], poses 0.5 mm apart, lead 5° ± 3° with a
+/// period of 17 mm, tilt 2°), every other pass run backwards, for `cutter`; the blade as a
+/// 120 × 60 grid over u in [-30, 30], v in [-15, 15].
+pub fn five_axis_zigzag(cutter: &Cutter) -> Result<(Toolpath, cam_core::Mesh)> {
+    let surface = TestSurface::Blade {
+        twist_rad_per_mm: 0.01,
+    };
+    let spec = PassSpec {
+        surface,
+        v_mm: -12.0,
+        u0_mm: -30.0,
+        poses: 121,
+        step_mm: 0.5,
+        lead_deg: 5.0,
+        lead_wobble_deg: 3.0,
+        wobble_period_mm: 17.0,
+        tilt_deg: 2.0,
+    };
+    let path = zigzag(&spec, 13, 2.0, cutter);
+    let tris = surface_triangles(&surface, (-30.0, 30.0), (-15.0, 15.0), 120, 60);
+    let mesh = cam_core::Mesh::from_triangles(tris, "<blade>")?;
+    Ok((path, mesh))
+}
+
+/// (c) `cam_verify::verify` on [`five_axis_zigzag`] (rotating moves: crossings of the
+/// imprint surface refined onto the exact volume); no plan to compare with.
+fn five_axis_bench(runs: usize) -> Result<()> {
+    let cutter: Cutter = "bull:10:2".parse()?;
+    let (path, mesh) = five_axis_zigzag(&cutter)?;
+    let vc = VerifyConfig::new(0.01);
+    let (r, verify_s) = best_of(runs, || verify(&mesh, &path, &cutter, &vc));
+    let v = r?;
+    let t = v.timings;
+    let extra = |k: &str| {
+        v.report
+            .settings
+            .as_ref()
+            .and_then(|st| st.extra.get(k).copied())
+            .unwrap_or(0.0)
+    };
+    println!(
+        "\n5-axis zig-zag over the twisted blade (testpaths::zigzag, 13 passes, 2 mm stepover, \
+         lead 5° ± 3°, tilt 2°, every other pass backwards), {cutter}, {} moves, {} design \
+         triangles, VerifyConfig::new(0.01); best of {runs}; {}:\n\n\
+         | verify s | sweep s | refine s | measure s | refined vertices | us per vertex \
+         (measure) | exact refinements | overflow vectors | vectors kept linear | max gouge mm \
+         | max excess mm |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n\
+         | {verify_s:.3} | {:.3} | {:.3} | {:.3} | {} | {:.2} | {} | {} | {} | {:.6} | {:.4} |\n",
+        path.moves.len(),
+        mesh.len(),
+        crate::load_average(),
+        t.sweep_s,
+        t.refine_s,
+        t.measure_s,
+        v.refined.len(),
+        t.measure_s * 1e6 / v.refined.len().max(1) as f64,
+        v.stats.refinements,
+        extra("overflow_vectors"),
+        v.stats.kept_linear,
+        v.report.max_gouge_mm,
+        v.report.max_excess_mm,
+    );
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn five_axis_zigzag_has_every_pass_and_cell() {
+        let cutter: Cutter = "bull:10:2".parse().unwrap();
+        let (path, mesh) = five_axis_zigzag(&cutter).unwrap();
+        assert_eq!(path.moves.len(), 13 * 121);
+        let rapids = path
+            .moves
+            .iter()
+            .filter(|m| m.kind == MoveKind::Rapid)
+            .count();
+        assert_eq!(rapids, 13);
+        assert_eq!(mesh.len(), 2 * 120 * 60);
+    }
 
     #[test]
     fn imprint_timing_counts_points() {
