@@ -1385,6 +1385,29 @@ fn measure_vectors(
         if let Some((e, mv)) = cutter_entry(&line, hi, &mut stats[1]) {
             better(e, mv, (COLUMN, mv as u64), Source::Move(mv), &mut best);
         }
+        // A reading inside a rotating move's swept puck (its own move's, or a neighbour's
+        // across a shared pose) by more than `FOLD_MM` is provably not the first entry: the
+        // line was inside just before it. That move's poses are searched below it, until no
+        // such move holds the reading (a cap at a pass start, which is one pose, can stand
+        // in front of its own move's sheet).
+        for _ in 0..4 {
+            let Some((e, mv, _, _)) = best else { break };
+            let p = line.o + e.s * line.n;
+            let holder = [mv.checked_sub(1), Some(mv), Some(mv + 1)]
+                .into_iter()
+                .flatten()
+                .filter_map(|m| Some((m, rf.feed_geometry(m)?)))
+                .find(|(_, g)| !g.is_translation() && g.depth_at(p) > FOLD_MM);
+            let Some((m, g)) = holder else { break };
+            stats[1] += 1;
+            let seg = Line { hi: e.s, ..line };
+            match g.entry_min_over(&seg, 0.0, 1.0) {
+                Some((ne, _)) if ne.s < e.s => {
+                    better(ne, m, (u8::MAX, m as u64), Source::Move(m), &mut best);
+                }
+                _ => break,
+            }
+        }
         match (best, linear) {
             (Some((e, mv, _, src)), _) => {
                 stats[0] = 1;

@@ -392,3 +392,143 @@ fn a_rapid_through_the_part_fails_the_check() {
         );
     }
 }
+
+/// A 5-axis CL program from the CLI: three overlapping passes of a bull:10:2 over a twisted
+/// blade (lead 8° ± 3°, tilt 3°, the middle pass run backwards, the axis turning at every
+/// move), every pose pushed 0.03 mm into the blade along its normal, as APT `GOTO/x,y,z,i,j,k`
+/// data. `cam verify` must fail it (exit 1) and every worst gouge and excess it reports must
+/// equal, to 1e-6 mm, the first hit along the vertex's normal of an independent brute-force
+/// envelope (the cutter 60 mm tall, 48 instances per move refined to 1e-9 mm, sphere-traced)
+/// of the program
+/// as read back. The deepest gouge lies within 0.01 mm of the push: vertices between the
+/// passes see the tool curve away, and between two poses the interpolated tool dips a little
+/// further (measured: 0.0314 mm for the 0.03 mm push).
+#[test]
+fn a_five_axis_cl_program_reads_the_envelope() {
+    use cam_core::{Cutter, DVec3};
+    use cam_verify::envelope::{BruteEnvelope, EnvelopeConfig};
+    use cam_verify::testpaths::{PassSpec, TestSurface, pass, surface_triangles};
+    let d = tempfile::tempdir().unwrap();
+    let cutter: Cutter = "bull:10:2".parse().unwrap();
+    let surface = TestSurface::Blade {
+        twist_rad_per_mm: 0.01,
+    };
+    let push = 0.03;
+    let mut apt = String::from("UNITS/MM\n");
+    for (i, v) in [-3.0, -0.5, 2.0].into_iter().enumerate() {
+        let spec = PassSpec {
+            surface,
+            v_mm: v,
+            u0_mm: 0.0,
+            poses: 21,
+            step_mm: 1.0,
+            lead_deg: 8.0,
+            lead_wobble_deg: 3.0,
+            wobble_period_mm: 11.0,
+            tilt_deg: 3.0,
+        };
+        let mut poses: Vec<(f64, cam_core::Pose)> = pass(&spec, &cutter)
+            .moves
+            .iter()
+            .enumerate()
+            .map(|(j, m)| (j as f64, m.pose))
+            .collect();
+        if i == 1 {
+            poses.reverse();
+        }
+        for (k, (j, p)) in poses.iter().enumerate() {
+            let (_, n) = surface.eval(j * spec.step_mm, v);
+            let tip = p.tip - push * n;
+            if k == 0 {
+                apt.push_str("RAPID\n");
+            }
+            apt.push_str(&format!(
+                "GOTO/{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
+                tip.x, tip.y, tip.z, p.axis.x, p.axis.y, p.axis.z
+            ));
+        }
+    }
+    // The blade as a shared-vertex grid (OBJ, counter-clockwise from +N).
+    let (nu, nv) = (40usize, 24usize);
+    let tris = surface_triangles(&surface, (-4.0, 24.0), (-9.0, 8.0), nu, nv);
+    let mut obj = String::new();
+    for j in 0..=nv {
+        for i in 0..=nu {
+            let (u, v) = (
+                -4.0 + 28.0 * i as f64 / nu as f64,
+                -9.0 + 17.0 * j as f64 / nv as f64,
+            );
+            let p = surface.eval(u, v).0;
+            obj.push_str(&format!("v {:?} {:?} {:?}\n", p.x, p.y, p.z));
+        }
+    }
+    let id = |i: usize, j: usize| j * (nu + 1) + i + 1;
+    for j in 0..nv {
+        for i in 0..nu {
+            obj.push_str(&format!(
+                "f {} {} {}\n",
+                id(i, j),
+                id(i + 1, j),
+                id(i + 1, j + 1)
+            ));
+            obj.push_str(&format!(
+                "f {} {} {}\n",
+                id(i, j),
+                id(i + 1, j + 1),
+                id(i, j + 1)
+            ));
+        }
+    }
+    assert_eq!(tris.len(), 2 * nu * nv);
+    let apt_path = write(d.path(), "blade.apt", &apt);
+    let obj_path = write(d.path(), "blade.obj", &obj);
+    let o = verify_json(&apt_path, &obj_path, "bull:10:2", &["--tolerance", "0.01"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let gouge = j["max_gouge_mm"].as_f64().unwrap();
+    assert!(
+        (gouge - push).abs() <= 0.01,
+        "max gouge {gouge} for a push of {push}"
+    );
+    let tp = cam_gcode::read_apt(&apt_path).unwrap();
+    let env = BruteEnvelope::new(
+        &tp,
+        &cutter,
+        &EnvelopeConfig {
+            instances_per_move: 48,
+            // The whole cutter a vector can reach: its side 60 mm up (the verifier's is
+            // unbounded).
+            height_mm: Some(60.0),
+            ..Default::default()
+        },
+    );
+    let mut checked = 0;
+    for key in ["worst_gouges", "worst_excess"] {
+        for w in j[key].as_array().unwrap() {
+            let f = |k: &str| {
+                let a = w[k].as_array().unwrap();
+                DVec3::new(
+                    a[0].as_f64().unwrap(),
+                    a[1].as_f64().unwrap(),
+                    a[2].as_f64().unwrap(),
+                )
+            };
+            let (p, n) = (f("position"), f("normal"));
+            let reading = w["signed_mm"].as_f64().unwrap();
+            let hit = env
+                .first_hit(p - n, n, 6.0, 1e-9)
+                .expect("the envelope is hit")
+                - 1.0;
+            assert!(
+                (hit - reading).abs() <= 1e-6,
+                "{key} at {p}: cam verify {reading}, envelope {hit}"
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked >= 10, "{checked}");
+    assert_eq!(
+        j["max_gouge_mm"].as_f64(),
+        j["worst_gouges"][0]["signed_mm"].as_f64().map(|s| -s)
+    );
+}

@@ -274,3 +274,80 @@ fn overlapping_passes_read_the_envelope() {
     assert_eq!(x.disagreements + x.misses, 0, "{:?}", x.disagreeing);
     assert!(x.stats.max_abs_mm <= 1e-6, "{}", x.stats.max_abs_mm);
 }
+
+/// Where passes start and end: the tool at a pass's first pose is a cap of the swept
+/// surface, which can stand in front of its own move's sheet (the line enters the first
+/// pose's puck later than it enters the move's, a few hundredths of a pose on). The 986
+/// lines over the ends of a zig-zag of two 5-axis passes (bull:10:2, lead 5° ± 3°, tilt 2°,
+/// 0.5 mm poses) must read the brute-force envelope to 1e-6 mm (taking the cap's reading
+/// there was up to 3.5e-4 mm late).
+#[test]
+fn pass_ends_read_the_envelope() {
+    let cutter = Cutter::bull(10.0, 2.0).unwrap();
+    let surface = TestSurface::Blade {
+        twist_rad_per_mm: 0.01,
+    };
+    let spec = PassSpec {
+        surface,
+        v_mm: -1.0,
+        u0_mm: 0.0,
+        poses: 21,
+        step_mm: 0.5,
+        lead_deg: 5.0,
+        lead_wobble_deg: 3.0,
+        wobble_period_mm: 17.0,
+        tilt_deg: 2.0,
+    };
+    let path = cam_verify::testpaths::zigzag(&spec, 2, 2.0, &cutter);
+    let env = BruteEnvelope::new(
+        &path,
+        &cutter,
+        &EnvelopeConfig {
+            instances_per_move: 48,
+            ..Default::default()
+        },
+    );
+    let mut lines = normal_lines(&surface, (-0.3, 0.5), (-4.0, 3.0), 17, 29, 2.0);
+    lines.extend(normal_lines(
+        &surface,
+        (9.5, 10.3),
+        (-4.0, 3.0),
+        17,
+        29,
+        2.0,
+    ));
+    let truth = envelope_hits(&env, &lines, 40.0, 1e-9);
+    let cfg = SweepConfig {
+        inserts: 40,
+        max_step_mm: 0.25,
+        ..SweepConfig::default()
+    };
+    let models = [
+        SweepModel::new(&path, &cutter, &cfg),
+        SweepModel::new(
+            &path,
+            &cutter,
+            &SweepConfig {
+                reverse: true,
+                ..cfg
+            },
+        ),
+    ];
+    let exact = first_entries(
+        &[&models[0], &models[1]],
+        &path,
+        &lines,
+        40.0,
+        SurfaceModel::Exact,
+    );
+    let x = compare_hits(&exact, &truth);
+    println!(
+        "pass ends: {} lines, {} hit, exact against the envelope max {:.2e} mm",
+        lines.len(),
+        lines.len() - x.misses,
+        x.stats.max_abs_mm
+    );
+    assert_eq!(x.disagreements, 0, "{:?}", x.disagreeing);
+    assert!(x.misses < lines.len() / 2, "{} misses", x.misses);
+    assert!(x.stats.max_abs_mm <= 1e-6, "{}", x.stats.max_abs_mm);
+}
