@@ -479,6 +479,7 @@ pub fn run(a: PlanArgs) -> Result<()> {
             let warnings = [
                 crate::verify::topology_warning(v),
                 crate::verify::rapids_warning(v),
+                crate::verify::exactness_warning(v),
             ];
             for w in warnings.into_iter().flatten() {
                 eprintln!("cam plan: {w}");

@@ -156,9 +156,13 @@ pub fn run(a: VerifyArgs) -> Result<()> {
             ),
             Some((asm, Some(r))) => crate::plan::print_collisions(r, asm),
         }
-        for w in [topology_warning(&v), rapids_warning(&v)]
-            .into_iter()
-            .flatten()
+        for w in [
+            topology_warning(&v),
+            rapids_warning(&v),
+            exactness_warning(&v),
+        ]
+        .into_iter()
+        .flatten()
         {
             eprintln!("cam verify: {w}");
         }
@@ -314,6 +318,20 @@ pub fn summary_line(v: &Verification, tol: f64) -> String {
             .map_or(f64::NAN, |s| s.deviation.outside_mm),
         v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s + v.timings.rapids_s
     )
+}
+
+/// A warning when some readings are not proven exact: a vector whose list of crossings of
+/// the imprint surface overflowed (the deepest may be among those dropped), or whose
+/// crossings could not be refined onto the exact volume (the linear value stands).
+pub fn exactness_warning(v: &Verification) -> Option<String> {
+    let (over, lin) = (v.stats.overflow, v.stats.kept_linear);
+    (over + lin > 0).then(|| {
+        format!(
+            "warning: {} points are not proven exact and may read late ({over} with more \
+             crossings than kept, {lin} on the linear surface where no crossing refined)",
+            over + lin
+        )
+    })
 }
 
 /// A warning when some rapids could not be checked (the axis off +Z: 5-axis repositioning).

@@ -393,64 +393,30 @@ fn a_rapid_through_the_part_fails_the_check() {
     }
 }
 
-/// A 5-axis CL program from the CLI: three overlapping passes of a bull:10:2 over a twisted
-/// blade (lead 8° ± 3°, tilt 3°, the middle pass run backwards, the axis turning at every
-/// move), every pose pushed 0.03 mm into the blade along its normal, as APT `GOTO/x,y,z,i,j,k`
-/// data. `cam verify` must fail it (exit 1) and every worst gouge and excess it reports must
-/// equal, to 1e-6 mm, the first hit along the vertex's normal of an independent brute-force
-/// envelope (the cutter 60 mm tall, 48 instances per move refined to 1e-9 mm, sphere-traced)
-/// of the program
-/// as read back. The deepest gouge lies within 0.01 mm of the push: vertices between the
-/// passes see the tool curve away, and between two poses the interpolated tool dips a little
-/// further (measured: 0.0314 mm for the 0.03 mm push).
-#[test]
-fn a_five_axis_cl_program_reads_the_envelope() {
-    use cam_core::{Cutter, DVec3};
-    use cam_verify::envelope::{BruteEnvelope, EnvelopeConfig};
-    use cam_verify::testpaths::{PassSpec, TestSurface, pass, surface_triangles};
-    let d = tempfile::tempdir().unwrap();
-    let cutter: Cutter = "bull:10:2".parse().unwrap();
-    let surface = TestSurface::Blade {
-        twist_rad_per_mm: 0.01,
-    };
-    let push = 0.03;
-    let mut apt = String::from("UNITS/MM\n");
-    for (i, v) in [-3.0, -0.5, 2.0].into_iter().enumerate() {
-        let spec = PassSpec {
-            surface,
-            v_mm: v,
-            u0_mm: 0.0,
-            poses: 21,
-            step_mm: 1.0,
-            lead_deg: 8.0,
-            lead_wobble_deg: 3.0,
-            wobble_period_mm: 11.0,
-            tilt_deg: 3.0,
-        };
-        let mut poses: Vec<(f64, cam_core::Pose)> = pass(&spec, &cutter)
-            .moves
-            .iter()
-            .enumerate()
-            .map(|(j, m)| (j as f64, m.pose))
-            .collect();
-        if i == 1 {
-            poses.reverse();
-        }
-        for (k, (j, p)) in poses.iter().enumerate() {
-            let (_, n) = surface.eval(j * spec.step_mm, v);
-            let tip = p.tip - push * n;
-            if k == 0 {
-                apt.push_str("RAPID\n");
-            }
-            apt.push_str(&format!(
-                "GOTO/{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
-                tip.x, tip.y, tip.z, p.axis.x, p.axis.y, p.axis.z
-            ));
-        }
+/// The twisted blade of the 5-axis tests (`cam_verify::testpaths`).
+const BLADE: cam_verify::testpaths::TestSurface = cam_verify::testpaths::TestSurface::Blade {
+    twist_rad_per_mm: 0.01,
+};
+
+/// A pass over [`BLADE`] at `v = 0`: 21 poses 1 mm apart from `u = 0`, lead 8° ± 3°, tilt 3°.
+fn blade_pass_spec() -> cam_verify::testpaths::PassSpec {
+    cam_verify::testpaths::PassSpec {
+        surface: BLADE,
+        v_mm: 0.0,
+        u0_mm: 0.0,
+        poses: 21,
+        step_mm: 1.0,
+        lead_deg: 8.0,
+        lead_wobble_deg: 3.0,
+        wobble_period_mm: 11.0,
+        tilt_deg: 3.0,
     }
-    // The blade as a shared-vertex grid (OBJ, counter-clockwise from +N).
+}
+
+/// [`BLADE`] over u in [-4, 24], v in [-9, 8] as a shared-vertex grid of 40 × 24 cells, OBJ
+/// text, counter-clockwise from +N.
+fn blade_obj() -> String {
     let (nu, nv) = (40usize, 24usize);
-    let tris = surface_triangles(&surface, (-4.0, 24.0), (-9.0, 8.0), nu, nv);
     let mut obj = String::new();
     for j in 0..=nv {
         for i in 0..=nu {
@@ -458,7 +424,7 @@ fn a_five_axis_cl_program_reads_the_envelope() {
                 -4.0 + 28.0 * i as f64 / nu as f64,
                 -9.0 + 17.0 * j as f64 / nv as f64,
             );
-            let p = surface.eval(u, v).0;
+            let p = BLADE.eval(u, v).0;
             obj.push_str(&format!("v {:?} {:?} {:?}\n", p.x, p.y, p.z));
         }
     }
@@ -479,9 +445,70 @@ fn a_five_axis_cl_program_reads_the_envelope() {
             ));
         }
     }
-    assert_eq!(tris.len(), 2 * nu * nv);
-    let apt_path = write(d.path(), "blade.apt", &apt);
-    let obj_path = write(d.path(), "blade.obj", &obj);
+    obj
+}
+
+/// APT CL text of `passes` (tool tips in mm, unit axes): each opened by a rapid.
+fn apt_text(passes: &[Vec<cam_core::Pose>]) -> String {
+    let mut apt = String::from("UNITS/MM\n");
+    for poses in passes {
+        for (k, p) in poses.iter().enumerate() {
+            if k == 0 {
+                apt.push_str("RAPID\n");
+            }
+            apt.push_str(&format!(
+                "GOTO/{:.12},{:.12},{:.12},{:.15},{:.15},{:.15}\n",
+                p.tip.x, p.tip.y, p.tip.z, p.axis.x, p.axis.y, p.axis.z
+            ));
+        }
+    }
+    apt
+}
+
+/// A 5-axis CL program from the CLI: three overlapping passes of a bull:10:2 over a twisted
+/// blade (lead 8° ± 3°, tilt 3°, the middle pass run backwards, the axis turning at every
+/// move), every pose pushed 0.03 mm into the blade along its normal, as APT `GOTO/x,y,z,i,j,k`
+/// data. `cam verify` must fail it (exit 1) and every worst gouge and excess it reports must
+/// equal, to 1e-6 mm, the first hit along the vertex's normal of an independent brute-force
+/// envelope (the cutter 60 mm tall, 48 instances per move refined to 1e-9 mm, sphere-traced)
+/// of the program
+/// as read back. The deepest gouge lies within 0.01 mm of the push: vertices between the
+/// passes see the tool curve away, and between two poses the interpolated tool dips a little
+/// further (measured: 0.0314 mm for the 0.03 mm push).
+#[test]
+fn a_five_axis_cl_program_reads_the_envelope() {
+    use cam_core::{Cutter, DVec3};
+    use cam_verify::envelope::{BruteEnvelope, EnvelopeConfig};
+    use cam_verify::testpaths::{PassSpec, pass};
+    let d = tempfile::tempdir().unwrap();
+    let cutter: Cutter = "bull:10:2".parse().unwrap();
+    let surface = BLADE;
+    let push = 0.03;
+    let mut passes = Vec::new();
+    for (i, v) in [-3.0, -0.5, 2.0].into_iter().enumerate() {
+        let spec = PassSpec {
+            v_mm: v,
+            ..blade_pass_spec()
+        };
+        let mut poses: Vec<cam_core::Pose> = pass(&spec, &cutter)
+            .moves
+            .iter()
+            .enumerate()
+            .map(|(j, m)| {
+                let (_, n) = surface.eval(j as f64 * spec.step_mm, v);
+                cam_core::Pose {
+                    tip: m.pose.tip - push * n,
+                    axis: m.pose.axis,
+                }
+            })
+            .collect();
+        if i == 1 {
+            poses.reverse();
+        }
+        passes.push(poses);
+    }
+    let apt_path = write(d.path(), "blade.apt", &apt_text(&passes));
+    let obj_path = write(d.path(), "blade.obj", &blade_obj());
     let o = verify_json(&apt_path, &obj_path, "bull:10:2", &["--tolerance", "0.01"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -528,7 +555,53 @@ fn a_five_axis_cl_program_reads_the_envelope() {
     }
     assert!(checked >= 10, "{checked}");
     assert_eq!(
+        j["settings"]["extra"]["overflow_vectors"].as_f64(),
+        Some(0.0)
+    );
+    assert_eq!(
         j["max_gouge_mm"].as_f64(),
         j["worst_gouges"][0]["signed_mm"].as_f64().map(|s| -s)
+    );
+}
+
+/// A 5-axis program that runs the same short pass 70 times puts more crossings of the
+/// imprint surface on the vectors under it than the locator keeps: the report counts them
+/// (`overflow_vectors`) and the summary warns that those points are not proven exact.
+#[test]
+fn overflowing_crossings_are_reported_and_warned() {
+    use cam_verify::testpaths::pass;
+    let d = tempfile::tempdir().unwrap();
+    let cutter: cam_core::Cutter = "bull:10:2".parse().unwrap();
+    let spec = cam_verify::testpaths::PassSpec {
+        poses: 6,
+        ..blade_pass_spec()
+    };
+    let one: Vec<cam_core::Pose> = pass(&spec, &cutter).moves.iter().map(|m| m.pose).collect();
+    let passes = vec![one; 70];
+    let apt_path = write(d.path(), "repeat.apt", &apt_text(&passes));
+    let obj_path = write(d.path(), "blade.obj", &blade_obj());
+    let o = verify_json(&apt_path, &obj_path, "bull:10:2", &[]);
+    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let over = j["settings"]["extra"]["overflow_vectors"].as_f64().unwrap();
+    let lin = j["settings"]["extra"]["kept_linear_vectors"]
+        .as_f64()
+        .unwrap();
+    assert!(over > 0.0, "{over}");
+    let args = [
+        "verify",
+        apt_path.to_str().unwrap(),
+        "--part",
+        obj_path.to_str().unwrap(),
+        "--tool",
+        "bull:10:2",
+    ];
+    let o = cam(&args);
+    let text = stderr(&o);
+    assert!(
+        text.contains(&format!(
+            "{} points are not proven exact and may read late ({over} with more crossings",
+            over + lin
+        )),
+        "{text}"
     );
 }
