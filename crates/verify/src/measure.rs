@@ -440,6 +440,20 @@ impl Refiner<'_> {
         best
     }
 
+    /// True when `line` provably enters none of the pucks of the rotating move whose strip
+    /// `c` crosses ([`MoveGeometry::misses_pucks`]): a crossing whose refinement found
+    /// nothing is then refuted rather than inconclusive.
+    fn proves_miss(&self, line: &Line, c: &Crossing) -> bool {
+        let model = self.models[c.model as usize];
+        let (piece, _) = unkey(c.key);
+        match model.pieces[piece] {
+            Piece::Strip { step, .. } => {
+                self.geometry(step.mv).is_some_and(|g| g.misses_pucks(line))
+            }
+            _ => false,
+        }
+    }
+
     /// A key naming what a refinement of `c` computes, to refine it once per vector.
     fn identity(&self, c: &Crossing) -> (u8, u64) {
         let model = self.models[c.model as usize];
@@ -1281,7 +1295,7 @@ fn measure_vectors(
                     };
                     better(e, mv, (c.model, c.key), src, &mut best);
                     all_refuted = false;
-                } else if !rf.answers_exactly(c) {
+                } else if !rf.answers_exactly(c) && !rf.proves_miss(&line, c) {
                     inconclusive = true;
                     all_refuted = false;
                 } else {
