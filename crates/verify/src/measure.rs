@@ -147,9 +147,10 @@ fn source_geometry(
 /// Progress callback: `(vectors done, vectors in all)`; called between chunks.
 pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
-/// How deep (mm) a refined point may lie inside another pose's puck of its own move and
-/// still count as the move's entry (rounding of the Newton solve and the pose search).
-const FOLD_MM: f64 = 1e-9;
+/// How deep (mm) a reading may lie inside a rotating move's swept puck and still stand
+/// (rounding of the Newton solve and the pose search); deeper, that move is searched below
+/// it.
+const INSIDE_MM: f64 = 1e-9;
 
 /// Vectors located and refined per chunk (progress is reported between chunks).
 const MEASURE_CHUNK: usize = 1 << 17;
@@ -376,20 +377,9 @@ impl Refiner<'_> {
                 frame as usize + 1
             }
         };
-        // Newton's point is where the line crosses one pose's characteristic sheet. Under
-        // rotation a sheet can fold inside the move's volume (inserts of the complement half
-        // that do not all cut): a point deeper than `FOLD_MM` inside another pose's puck is
-        // not the entry, and the poses are searched.
-        let own = match guess
+        let own = guess
             .and_then(|(u, psi)| g.imprint_entry(line, &body_at(frame as usize), [u, psi, c.s]))
-        {
-            Some((e, u)) if g.depth_at(line.o + e.s * line.n) <= FOLD_MM => Some((e, u)),
-            Some((e, u)) => match g.entry_min_over(line, 0.0, 1.0) {
-                Some((m, mu)) if m.s < e.s => Some((m, mu)),
-                _ => Some((e, u)),
-            },
-            None => g.entry_min_over(line, lo, hi),
-        };
+            .or_else(|| g.entry_min_over(line, lo, hi));
         // Near a move end (the step's own or the solution's), the neighbouring move and the
         // tool at the joint.
         let u_sol = own.map_or(0.5 * (u0 + u1), |(_, u)| u);
@@ -1400,7 +1390,7 @@ fn measure_vectors(
             better(e, mv, (COLUMN, mv as u64), Source::Move(mv), &mut best);
         }
         // A reading inside a rotating move's swept puck (its own move's, or a neighbour's
-        // across a shared pose) by more than `FOLD_MM` is provably not the first entry: the
+        // across a shared pose) by more than `INSIDE_MM` is provably not the first entry: the
         // line was inside just before it. That move's poses are searched below it, until no
         // such move holds the reading (a cap at a pass start, which is one pose, can stand
         // in front of its own move's sheet).
@@ -1411,7 +1401,7 @@ fn measure_vectors(
                 .into_iter()
                 .flatten()
                 .filter_map(|m| Some((m, rf.feed_geometry(m)?)))
-                .find(|(_, g)| !g.is_translation() && g.depth_at(p) > FOLD_MM);
+                .find(|(_, g)| !g.is_translation() && g.depth_at(p) > INSIDE_MM);
             let Some((m, g)) = holder else { break };
             stats[1] += 1;
             let seg = Line { hi: e.s, ..line };
