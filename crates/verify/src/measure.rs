@@ -329,11 +329,11 @@ impl Refiner<'_> {
         g: &MoveGeometry,
     ) -> Option<(Entry, u32)> {
         let mut best: Option<(Entry, u32)> = None;
-        let mut take = |e: Option<Entry>, mv: u32| {
+        let take = |e: Option<Entry>, mv: u32, best: &mut Option<(Entry, u32)>| {
             if let Some(e) = e
                 && best.is_none_or(|(b, _)| e.s < b.s)
             {
-                best = Some((e, mv));
+                *best = Some((e, mv));
             }
         };
         let (u0, u1) = (step.u_from.min(step.u_to), step.u_from.max(step.u_to));
@@ -383,7 +383,7 @@ impl Refiner<'_> {
         // Near a move end (the step's own or the solution's), the neighbouring move and the
         // tool at the joint.
         let u_sol = own.map_or(0.5 * (u0 + u1), |(_, u)| u);
-        take(own.map(|(e, _)| e), step.mv);
+        take(own.map(|(e, _)| e), step.mv, &mut best);
         let reach = 2.0 * du.max(1e-9);
         for (touch, at, adj, u_adj) in [
             (
@@ -402,12 +402,12 @@ impl Refiner<'_> {
             if !touch {
                 continue;
             }
-            take(g.entry_at(line, at), step.mv);
+            take(g.entry_at(line, at), step.mv, &mut best);
             let Some((m, ga)) = adj.and_then(|m| Some((m, self.feed_geometry(m)?))) else {
                 continue;
             };
             if ga.is_translation() {
-                take(ga.translation_entry(line), m);
+                take(ga.translation_entry(line), m, &mut best);
                 continue;
             }
             // The joint's frame: the step's pose at `at` if it has one, else carried there.
@@ -422,10 +422,16 @@ impl Refiner<'_> {
                 }
             };
             let near = if u_adj == 1.0 { (0.5, 1.0) } else { (0.0, 0.5) };
+            // The search over the neighbour's poses only matters below the best entry so
+            // far (a later one is not taken): the line is cut there.
+            let below = Line {
+                hi: best.map_or(line.hi, |(b, _)| b.s),
+                ..*line
+            };
             let adj_entry = guess
                 .and_then(|(_, psi)| ga.imprint_entry(line, &body, [u_adj, psi, c.s]))
-                .or_else(|| ga.entry_min_over(line, near.0, near.1));
-            take(adj_entry.map(|(e, _)| e), m);
+                .or_else(|| ga.entry_min_over(&below, near.0, near.1));
+            take(adj_entry.map(|(e, _)| e), m, &mut best);
         }
         best
     }
