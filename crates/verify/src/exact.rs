@@ -580,6 +580,34 @@ pub struct MoveGeometry {
     pub puck: Puck,
 }
 
+/// What the closed-form hulls of a move's poses are built from (see
+/// `MoveGeometry::hull_frame`).
+struct HullFrame {
+    /// Torus centres at the move's ends (mm).
+    c0: DVec3,
+    c1: DVec3,
+    /// The mean axis: within `θ/2` of every pose's axis.
+    km: DVec3,
+    /// How far the centre strays from its chord (mm, [`MoveGeometry::centre_sag`]).
+    sag: f64,
+    /// `sin(θ/2)` of the axis turn `θ`.
+    sh: f64,
+}
+
+impl HullFrame {
+    /// Radius and half-height (mm) of the cylinder about the mean axis at a chord point
+    /// that holds every pose's puck there: `a + r + δ + r·sin(θ/2)` and
+    /// `r + δ + (a + r)·sin(θ/2)`, each with a relative pad for rounding.
+    fn puck_cylinder(&self, puck: &Puck) -> (f64, f64) {
+        let (a, r) = (puck.a, puck.r);
+        let pad = 1e-9 * (1.0 + a + r + self.c0.abs().max(self.c1.abs()).max_element());
+        (
+            a + r + self.sag + r * self.sh + pad,
+            r + self.sag + (a + r) * self.sh + pad,
+        )
+    }
+}
+
 impl MoveGeometry {
     /// True when the axis does not change along the move.
     pub fn is_translation(&self) -> bool {
@@ -763,21 +791,31 @@ impl MoveGeometry {
     /// whether `line` may enter it: false only when it misses one of the two columns whose
     /// intersection holds it.
     pub fn puck_hull_met(&self, line: &Line, u_lo: f64, u_hi: f64) -> bool {
-        let (c0, k0) = self.centre_axis(0.0);
-        let (c1, k1) = self.centre_axis(1.0);
-        let km = (k0 + k1).normalize_or_zero();
-        if km == DVec3::ZERO {
+        let Some(h) = self.hull_frame() else {
             return true;
-        }
-        let (a, r) = (self.puck.a, self.puck.r);
-        let (sag, sh) = (self.centre_sag(), self.half_turn().0);
-        let pad = 1e-9 * (1.0 + a + r + c0.abs().max(c1.abs()).max_element());
-        let radius = a + r + sag + r * sh + pad;
-        let half = r + sag + (a + r) * sh + pad;
-        let (p0, p1) = (c0.lerp(c1, u_lo), c0.lerp(c1, u_hi));
+        };
+        let (radius, half) = h.puck_cylinder(&self.puck);
+        let (p0, p1) = (h.c0.lerp(h.c1, u_lo), h.c0.lerp(h.c1, u_hi));
+        let km = h.km;
         let up = crate::column::column_translation_entry;
         up(line, p0 - half * km, p1 - half * km, km, radius, true).is_some()
             && up(line, p0 + half * km, p1 + half * km, -km, radius, true).is_some()
+    }
+
+    /// The centres at the move's ends, its mean axis, the centre's sag and `sin(θ/2)`: what
+    /// the closed-form hulls of its poses are built from. `None` when the end axes are
+    /// opposite (no mean axis).
+    fn hull_frame(&self) -> Option<HullFrame> {
+        let (c0, k0) = self.centre_axis(0.0);
+        let (c1, k1) = self.centre_axis(1.0);
+        let km = (k0 + k1).normalize_or_zero();
+        (km != DVec3::ZERO).then(|| HullFrame {
+            c0,
+            c1,
+            km,
+            sag: self.centre_sag(),
+            sh: self.half_turn().0,
+        })
     }
 
     /// Whether `line` provably enters none of the move's pucks. The clearance
@@ -799,29 +837,9 @@ impl MoveGeometry {
         let clearance = |u: f64| {
             let (c, k) = self.centre_axis(u);
             let d = |s: f64| self.puck.disk_distance(line.at(s) - c, k).0;
-            const G: f64 = 0.618_033_988_749_894_9;
-            let (mut lo, mut hi) = (line.lo, line.hi);
-            let mut best = d(lo).min(d(hi));
-            let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
-            let (mut f1, mut f2) = (d(x1), d(x2));
-            for _ in 0..200 {
-                if hi - lo <= 1e-12 * (1.0 + line.hi.abs().max(line.lo.abs())) {
-                    break;
-                }
-                if f1 <= f2 {
-                    hi = x2;
-                    (x2, f2) = (x1, f1);
-                    x1 = hi - G * (hi - lo);
-                    f1 = d(x1);
-                } else {
-                    lo = x1;
-                    (x1, f1) = (x2, f2);
-                    x2 = lo + G * (hi - lo);
-                    f2 = d(x2);
-                }
-            }
-            best = best.min(f1).min(f2);
-            best - (hi - lo) - r
+            let width = 1e-12 * (1.0 + line.hi.abs().max(line.lo.abs()));
+            let (least, bracket) = golden_search(line.lo, line.hi, width, d);
+            least - bracket - r
         };
         let pad = 1e-9 * (1.0 + a + r);
         for n in [64usize, 1024] {
@@ -844,19 +862,13 @@ impl MoveGeometry {
     /// axis `k̄` and the chord's point `c_lin(u)` grown in radius by `δ + r·sin(θ/2)` and in
     /// half-height by `δ + (a + r)·sin(θ/2)`; `p` must lie in it for some `u ∈ [0, 1]`.
     pub fn puck_hull_holds(&self, p: DVec3) -> bool {
-        let (c0, k0) = self.centre_axis(0.0);
-        let (c1, k1) = self.centre_axis(1.0);
-        let km = (k0 + k1).normalize_or_zero();
-        if km == DVec3::ZERO {
+        let Some(h) = self.hull_frame() else {
             return true;
-        }
-        let (a, r) = (self.puck.a, self.puck.r);
-        let (sag, sh) = (self.centre_sag(), self.half_turn().0);
-        let pad = 1e-9 * (1.0 + a + r);
-        let radius = a + r + sag + r * sh + pad;
-        let half = r + sag + (a + r) * sh + pad;
+        };
+        let (radius, half) = h.puck_cylinder(&self.puck);
+        let km = h.km;
         // q(u) = p − c0 − u·d: axial part linear in u, radial part a convex quadratic.
-        let (q, d) = (p - c0, c1 - c0);
+        let (q, d) = (p - h.c0, h.c1 - h.c0);
         let (qk, dk) = (q.dot(km), d.dot(km));
         let (mut lo, mut hi) = (0.0f64, 1.0f64);
         if dk.abs() > 0.0 {
@@ -891,27 +903,34 @@ impl MoveGeometry {
     /// axis line through `c_lin(u)` and at least `−δ − |w|·sin(θ/2)` along `k̄` from it.)
     pub fn column_hull_entry(&self, line: &Line) -> Option<Entry> {
         let rr = self.puck.a + self.puck.r;
-        let (c0, k0) = self.centre_axis(0.0);
-        let (c1, k1) = self.centre_axis(1.0);
+        if self.is_translation() {
+            let (c0, k) = self.centre_axis(0.0);
+            let (c1, _) = self.centre_axis(1.0);
+            return crate::column::column_translation_entry(line, c0, c1, k, rr, true);
+        }
         let everywhere = Some(Entry {
             s: line.lo,
             normal: -line.n,
         });
-        if self.is_translation() {
-            return crate::column::column_translation_entry(line, c0, c1, k0, rr, true);
-        }
-        let km = (k0 + k1).normalize_or_zero();
+        let Some(HullFrame {
+            c0,
+            c1,
+            km,
+            sag,
+            sh,
+        }) = self.hull_frame()
+        else {
+            return everywhere;
+        };
         let ends = [line.at(line.lo), line.at(line.hi)];
-        let sag = self.centre_sag();
         let far = ends
             .iter()
             .flat_map(|e| [e.distance(c0), e.distance(c1)])
             .fold(0.0, f64::max)
             + sag;
-        if km == DVec3::ZERO || !far.is_finite() {
+        if !far.is_finite() {
             return everywhere;
         }
-        let sh = self.half_turn().0;
         // A relative pad for rounding.
         let pad = 1e-9 * (1.0 + rr + far);
         let grow = sag + far * sh + pad;
@@ -1002,12 +1021,23 @@ impl MoveGeometry {
 /// The least value of `f` seen by a golden-section search for its minimum over
 /// `[lo, hi]`, the ends included, until the bracket is 1e-12 wide: the minimum where `f`
 /// is unimodal there.
-fn golden_min(mut lo: f64, mut hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+fn golden_min(lo: f64, hi: f64, f: impl FnMut(f64) -> f64) -> f64 {
+    golden_search(lo, hi, 1e-12, f).0
+}
+
+/// [`golden_min`] until the bracket is `width` wide: the least value seen and the final
+/// bracket's width (for a convex `f` its minimum lies in that bracket).
+fn golden_search(
+    mut lo: f64,
+    mut hi: f64,
+    width: f64,
+    mut f: impl FnMut(f64) -> f64,
+) -> (f64, f64) {
     const G: f64 = 0.618_033_988_749_894_9;
     let mut best = f(lo).min(f(hi));
     let (mut x1, mut x2) = (hi - G * (hi - lo), lo + G * (hi - lo));
     let (mut f1, mut f2) = (f(x1), f(x2));
-    while hi - lo > 1e-12 {
+    while hi - lo > width {
         best = best.min(f1).min(f2);
         if f1 <= f2 {
             hi = x2;
@@ -1021,7 +1051,7 @@ fn golden_min(mut lo: f64, mut hi: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
             f2 = f(x2);
         }
     }
-    best.min(f1).min(f2)
+    (best.min(f1).min(f2), hi - lo)
 }
 
 /// The distance (mm) between the segment `lo..hi` of `line` and the ray from `c` along the

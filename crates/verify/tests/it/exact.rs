@@ -34,6 +34,30 @@ impl Lcg {
     }
 }
 
+/// A random move whose axis turns: the first axis within about 17° of +Z, turned by an
+/// angle of about `turn` (radians), the tip starting in the 4 mm cube about the origin and
+/// moving `step` mm; puck radii `a` and `r` (mm). Each argument is a range to draw from.
+fn rotating_move(
+    g: &mut Lcg,
+    turn: (f64, f64),
+    step: (f64, f64),
+    a: (f64, f64),
+    r: (f64, f64),
+) -> cam_verify::exact::MoveGeometry {
+    use cam_core::Pose;
+    let k0 = (DVec3::Z + 0.3 * g.unit()).normalize();
+    let turn = g.range(turn.0, turn.1);
+    let k1 = (k0 + turn * g.unit()).normalize();
+    let t0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
+    let t1 = t0 + g.unit() * g.range(step.0, step.1);
+    let (a, r) = (g.range(a.0, a.1), g.range(r.0, r.1));
+    cam_verify::exact::MoveGeometry {
+        a: Pose { tip: t0, axis: k0 },
+        b: Pose { tip: t1, axis: k1 },
+        puck: Puck { a, r },
+    }
+}
+
 /// Smallest entry over `samples + 1` disk instances along the move: never below the true
 /// entry, and above it by at most the sampling gap.
 fn brute(line: &Line, a: f64, c0: DVec3, c1: DVec3, k: DVec3, samples: usize) -> Option<f64> {
@@ -501,22 +525,11 @@ fn column_translation_matches_instances() {
 /// neighbouring instances, and the search finds poses between them.
 #[test]
 fn rotating_column_entry_matches_instances() {
-    use cam_core::Pose;
-    use cam_verify::exact::MoveGeometry;
     let mut g = Lcg(11);
     let (mut compared, mut worst_above, mut worst_below) = (0, 0.0f64, 0.0f64);
     for case in 0..400 {
-        let k0 = (DVec3::Z + 0.3 * g.unit()).normalize();
-        let turn = g.range(0.02, 0.26);
-        let k1 = (k0 + turn * g.unit()).normalize();
-        let t0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
-        let t1 = t0 + g.unit() * g.range(0.1, 4.0);
-        let (a, r) = (g.range(0.0, 3.0), g.range(0.0, 2.0));
-        let geo = MoveGeometry {
-            a: Pose { tip: t0, axis: k0 },
-            b: Pose { tip: t1, axis: k1 },
-            puck: Puck { a, r },
-        };
+        let geo = rotating_move(&mut g, (0.02, 0.26), (0.1, 4.0), (0.0, 3.0), (0.0, 2.0));
+        let (t0, t1, k0, a, r) = (geo.a.tip, geo.b.tip, geo.a.axis, geo.puck.a, geo.puck.r);
         let o = DVec3::new(g.range(-8.0, 8.0), g.range(-8.0, 8.0), g.range(-8.0, 8.0));
         let aim = t0.lerp(t1, g.next()) + g.unit() * g.range(0.0, 1.5 * (a + r)) + 2.0 * k0;
         let line = Line {
@@ -568,23 +581,12 @@ fn rotating_column_entry_matches_instances() {
 /// are far from the move, and a hull that rejects nothing would pass the first checks.
 #[test]
 fn rotating_hulls_hold_every_pose() {
-    use cam_core::Pose;
-    use cam_verify::exact::MoveGeometry;
     let mut g = Lcg(23);
     let (mut entered, mut held) = (0usize, 0usize);
     let (mut column_skips, mut puck_skips, mut point_skips) = (0usize, 0usize, 0usize);
     for case in 0..300 {
-        let k0 = (DVec3::Z + 0.3 * g.unit()).normalize();
-        let turn = g.range(0.01, 1.0);
-        let k1 = (k0 + turn * g.unit()).normalize();
-        let t0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
-        let t1 = t0 + g.unit() * g.range(0.1, 4.0);
-        let (a, r) = (g.range(0.0, 3.0), g.range(0.05, 2.0));
-        let geo = MoveGeometry {
-            a: Pose { tip: t0, axis: k0 },
-            b: Pose { tip: t1, axis: k1 },
-            puck: Puck { a, r },
-        };
+        let geo = rotating_move(&mut g, (0.01, 1.0), (0.1, 4.0), (0.0, 3.0), (0.05, 2.0));
+        let (t0, t1, a, r) = (geo.a.tip, geo.b.tip, geo.puck.a, geo.puck.r);
         let o = DVec3::new(g.range(-9.0, 9.0), g.range(-9.0, 9.0), g.range(-9.0, 9.0));
         let aim = t0.lerp(t1, g.next()) + g.unit() * g.range(0.0, 2.0 * (a + r));
         let line = Line {
@@ -651,22 +653,11 @@ fn rotating_hulls_hold_every_pose() {
 /// 5-axis zig-zag.
 #[test]
 fn pose_search_finds_a_narrow_entry() {
-    use cam_core::Pose;
-    use cam_verify::exact::MoveGeometry;
     let mut g = Lcg(31);
     let (mut compared, mut worst) = (0usize, 0.0f64);
     for case in 0..300 {
-        let k0 = (DVec3::Z + 0.3 * g.unit()).normalize();
-        let turn = g.range(0.01, 0.3);
-        let k1 = (k0 + turn * g.unit()).normalize();
-        let t0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
-        let t1 = t0 + g.unit() * g.range(0.3, 3.0);
-        let (a, r) = (g.range(0.5, 3.0), g.range(0.3, 2.0));
-        let geo = MoveGeometry {
-            a: Pose { tip: t0, axis: k0 },
-            b: Pose { tip: t1, axis: k1 },
-            puck: Puck { a, r },
-        };
+        let geo = rotating_move(&mut g, (0.01, 0.3), (0.3, 3.0), (0.5, 3.0), (0.3, 2.0));
+        let (a, r) = (geo.puck.a, geo.puck.r);
         // Aimed at the bottom of a pose's puck from below.
         let (c, k) = geo.centre_axis(g.next());
         let aim = c - r * k + 0.8 * a * g.unit().reject_from(k);
@@ -706,22 +697,11 @@ fn pose_search_finds_a_narrow_entry() {
 /// does declare most of the lines that enter none (those passing close are left unproven).
 #[test]
 fn miss_proof_never_misses_an_entry() {
-    use cam_core::Pose;
-    use cam_verify::exact::MoveGeometry;
     let mut g = Lcg(37);
     let (mut proven, mut missing, mut entered) = (0usize, 0usize, 0usize);
     for case in 0..400 {
-        let k0 = (DVec3::Z + 0.3 * g.unit()).normalize();
-        let turn = g.range(0.01, 0.6);
-        let k1 = (k0 + turn * g.unit()).normalize();
-        let t0 = DVec3::new(g.range(-2.0, 2.0), g.range(-2.0, 2.0), g.range(-2.0, 2.0));
-        let t1 = t0 + g.unit() * g.range(0.1, 3.0);
-        let (a, r) = (g.range(0.0, 3.0), g.range(0.1, 2.0));
-        let geo = MoveGeometry {
-            a: Pose { tip: t0, axis: k0 },
-            b: Pose { tip: t1, axis: k1 },
-            puck: Puck { a, r },
-        };
+        let geo = rotating_move(&mut g, (0.01, 0.6), (0.1, 3.0), (0.0, 3.0), (0.1, 2.0));
+        let (t0, t1, k0, a, r) = (geo.a.tip, geo.b.tip, geo.a.axis, geo.puck.a, geo.puck.r);
         let aim = t0.lerp(t1, g.next()) + r * k0 + g.unit() * g.range(0.0, 2.5 * (a + r));
         let o = aim - 6.0 * g.unit();
         let line = Line {

@@ -207,6 +207,46 @@ fn twisted_blade_with_lead_tilt_and_rotating_axis() {
     );
 }
 
+/// The exact first entries along `lines` (forward and reverse sweeps, Q = 40, 0.25 mm
+/// steps, within 40 mm) against the brute-force envelope's (48 instances per move, refined
+/// to 1e-9 mm).
+fn exact_against_envelope(
+    path: &cam_core::Toolpath,
+    cutter: &Cutter,
+    lines: &[(cam_core::DVec3, cam_core::DVec3)],
+) -> cam_verify::envelope::LineErrorReport {
+    let env = BruteEnvelope::new(
+        path,
+        cutter,
+        &EnvelopeConfig {
+            instances_per_move: 48,
+            ..Default::default()
+        },
+    );
+    let truth = envelope_hits(&env, lines, 40.0, 1e-9);
+    let cfg = SweepConfig {
+        inserts: 40,
+        max_step_mm: 0.25,
+        ..SweepConfig::default()
+    };
+    let reverse = SweepConfig {
+        reverse: true,
+        ..cfg
+    };
+    let models = [
+        SweepModel::new(path, cutter, &cfg),
+        SweepModel::new(path, cutter, &reverse),
+    ];
+    let exact = first_entries(
+        &[&models[0], &models[1]],
+        path,
+        lines,
+        40.0,
+        SurfaceModel::Exact,
+    );
+    compare_hits(&exact, &truth)
+}
+
 /// A multi-pass program: a zig-zag of four overlapping 5-axis passes (bull:10:2, stepover
 /// 2.5 mm, lead 8° ± 3°, tilt 3°) over the twisted blade, where a line near the surface
 /// meets the volumes of several passes and many moves whose columns and pucks the
@@ -231,40 +271,8 @@ fn overlapping_passes_read_the_envelope() {
         tilt_deg: 3.0,
     };
     let path = cam_verify::testpaths::zigzag(&spec, 4, 2.5, &cutter);
-    let env = BruteEnvelope::new(
-        &path,
-        &cutter,
-        &EnvelopeConfig {
-            instances_per_move: 48,
-            ..Default::default()
-        },
-    );
     let lines = normal_lines(&surface, (5.0, 18.0), (-3.0, 3.5), 6, 9, 2.0);
-    let truth = envelope_hits(&env, &lines, 40.0, 1e-9);
-    let cfg = SweepConfig {
-        inserts: 40,
-        max_step_mm: 0.25,
-        ..SweepConfig::default()
-    };
-    let models = [
-        SweepModel::new(&path, &cutter, &cfg),
-        SweepModel::new(
-            &path,
-            &cutter,
-            &SweepConfig {
-                reverse: true,
-                ..cfg
-            },
-        ),
-    ];
-    let exact = first_entries(
-        &[&models[0], &models[1]],
-        &path,
-        &lines,
-        40.0,
-        SurfaceModel::Exact,
-    );
-    let x = compare_hits(&exact, &truth);
+    let x = exact_against_envelope(&path, &cutter, &lines);
     println!(
         "zig-zag: {} lines, exact against the envelope max {:.2e} mm, rms {:.2e} mm",
         lines.len(),
@@ -299,14 +307,6 @@ fn pass_ends_read_the_envelope() {
         tilt_deg: 2.0,
     };
     let path = cam_verify::testpaths::zigzag(&spec, 2, 2.0, &cutter);
-    let env = BruteEnvelope::new(
-        &path,
-        &cutter,
-        &EnvelopeConfig {
-            instances_per_move: 48,
-            ..Default::default()
-        },
-    );
     let mut lines = normal_lines(&surface, (-0.3, 0.5), (-4.0, 3.0), 17, 29, 2.0);
     lines.extend(normal_lines(
         &surface,
@@ -316,31 +316,7 @@ fn pass_ends_read_the_envelope() {
         29,
         2.0,
     ));
-    let truth = envelope_hits(&env, &lines, 40.0, 1e-9);
-    let cfg = SweepConfig {
-        inserts: 40,
-        max_step_mm: 0.25,
-        ..SweepConfig::default()
-    };
-    let models = [
-        SweepModel::new(&path, &cutter, &cfg),
-        SweepModel::new(
-            &path,
-            &cutter,
-            &SweepConfig {
-                reverse: true,
-                ..cfg
-            },
-        ),
-    ];
-    let exact = first_entries(
-        &[&models[0], &models[1]],
-        &path,
-        &lines,
-        40.0,
-        SurfaceModel::Exact,
-    );
-    let x = compare_hits(&exact, &truth);
+    let x = exact_against_envelope(&path, &cutter, &lines);
     println!(
         "pass ends: {} lines, {} hit, exact against the envelope max {:.2e} mm",
         lines.len(),
