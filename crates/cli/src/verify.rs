@@ -334,11 +334,12 @@ pub fn exactness_warning(v: &Verification) -> Option<String> {
     })
 }
 
-/// A warning when some rapids could not be checked (the axis off +Z: 5-axis repositioning).
+/// A warning when some rapids could not be checked (the axis turns between their ends:
+/// the tool's motion then depends on the machine's kinematics).
 pub fn rapids_warning(v: &Verification) -> Option<String> {
     (v.rapids.unchecked > 0).then(|| {
         format!(
-            "warning: {} rapids with the tool axis off +Z were not checked against the part",
+            "warning: {} rapids that turn the tool axis were not checked against the part",
             v.rapids.unchecked
         )
     })
@@ -354,8 +355,8 @@ pub fn verdict(v: &Verification, tol: f64) -> Result<()> {
     {
         let n = v.rapids.collisions.len();
         return Err(Findings(format!(
-            "{} into the part; the deepest, {:.4} mm below where the tool would rest on it, at \
-             ({:.3}, {:.3}, {:.3}){}",
+            "{} into the part; the deepest, {:.4} mm (along the tool axis) below where the tool \
+             would rest on it, at ({:.3}, {:.3}, {:.3}){}",
             if n == 1 {
                 "a rapid move runs".to_string()
             } else {

@@ -15,10 +15,13 @@
 //! `CL − min(z_A, z_B)`. The depth is vertical: how far the tool sits below where it would
 //! rest on the part.
 //!
-//! Rapids with the axis off +Z at either end (5-axis repositioning) are not checked; they
-//! are counted in [`RapidReport::unchecked`].
+//! A rapid that keeps a tilted axis (3+2 or 5-axis repositioning along a fixed axis) is the
+//! same problem in the frame where that axis is +Z: the part is turned into that frame (one
+//! drop-cutter per distinct axis) and the depth is measured along the axis. Rapids that turn
+//! the axis are not checked (how the tool moves between their end poses depends on the
+//! machine's kinematics); they are counted in [`RapidReport::unchecked`].
 
-use cam_core::{Cutter, DVec3, Mesh, MoveKind, Toolpath};
+use cam_core::{Cutter, DVec3, Mesh, MoveKind, Toolpath, Triangle};
 use cam_offset::DropCutter;
 use rayon::prelude::*;
 
@@ -29,7 +32,7 @@ pub struct RapidCollision {
     pub move_index: usize,
     /// Its line in the toolpath file (1-based), when known.
     pub line: Option<usize>,
-    /// How far (mm, vertical) the tool sinks below the CL surface, at its deepest.
+    /// How far (mm, along the tool axis) the tool sinks below the CL surface, at its deepest.
     pub depth_mm: f64,
     /// The tool tip there (mm).
     pub tip: [f64; 3],
@@ -38,12 +41,14 @@ pub struct RapidCollision {
 /// The rapids checked and those that run into the part.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct RapidReport {
-    /// Rapids checked (axis +Z at both ends, and moving; a first move that is a rapid is
-    /// checked at the pose it reaches).
+    /// Rapids checked (moving, with the same axis at both ends; a first move that is a
+    /// rapid is checked at the pose it reaches).
     pub checked: usize,
-    /// Rapids not checked: the axis is off +Z at an end.
+    /// Of those, rapids whose axis is off +Z (checked in the frame of their axis).
+    pub tilted: usize,
+    /// Rapids not checked: the axis turns between their ends.
     pub unchecked: usize,
-    /// Deepest a rapid sinks below the CL surface (mm, ≥ 0).
+    /// Deepest a rapid sinks below the CL surface (mm, ≥ 0, along the tool axis).
     pub max_depth_mm: f64,
     /// The rapids deeper than the tolerance, in toolpath order.
     pub collisions: Vec<RapidCollision>,
@@ -68,36 +73,75 @@ pub fn check_rapids(
                 && (i == 0 || start(i).tip != toolpath.moves[i].pose.tip)
         })
         .collect();
-    let vertical = crate::material::is_vertical;
-    let (checked, unchecked): (Vec<usize>, Vec<usize>) = rapids
-        .into_iter()
-        .partition(|&i| vertical(start(i).axis) && vertical(toolpath.moves[i].pose.axis));
-    if checked.is_empty() {
+    // Rapids whose axis does not turn, grouped by that axis (vertical first): each group is
+    // checked in the frame where its axis is +Z.
+    let same = |a: DVec3, b: DVec3| (a - b).length() <= 1e-12;
+    let mut groups: Vec<(DVec3, Vec<usize>)> = Vec::new();
+    let mut unchecked = 0;
+    for i in rapids {
+        let k = start(i).axis;
+        if !same(k, toolpath.moves[i].pose.axis) {
+            unchecked += 1;
+            continue;
+        }
+        let k = if crate::material::is_vertical(k) {
+            DVec3::Z
+        } else {
+            k
+        };
+        match groups.iter_mut().find(|(g, _)| *g == k) {
+            Some((_, v)) => v.push(i),
+            None => groups.push((k, vec![i])),
+        }
+    }
+    groups.sort_by_key(|(k, _)| *k != DVec3::Z);
+    let tilted = groups
+        .iter()
+        .filter(|(k, _)| *k != DVec3::Z)
+        .map(|(_, v)| v.len())
+        .sum();
+    let checked: usize = groups.iter().map(|(_, v)| v.len()).sum();
+    if checked == 0 {
         return RapidReport {
-            unchecked: unchecked.len(),
+            unchecked,
             ..RapidReport::default()
         };
     }
-    let dc = DropCutter::new(part, *cutter);
-    let depths: Vec<(f64, DVec3)> = checked
+    let mut depths: Vec<(usize, f64, DVec3)> = groups
         .par_iter()
-        .map(|&i| {
-            let (a, b) = (start(i).tip, toolpath.moves[i].pose.tip);
-            if a.x == b.x && a.y == b.y {
-                let low = if a.z <= b.z { a } else { b };
-                let depth = dc.drop(a.x, a.y).map_or(0.0, |z| (z - low.z).max(0.0));
-                return (depth, low);
-            }
-            let r = dc.chord_rise((a.x, a.y), (b.x, b.y), a.z, b.z, 0.0, f64::INFINITY);
-            (r.rise_mm.max(0.0), a.lerp(b, r.at))
+        .flat_map_iter(|(k, idx)| {
+            let frame = AxisFrame::new(*k);
+            let dc = frame
+                .turn_mesh(part)
+                .map(|m| DropCutter::new(m.as_ref().unwrap_or(part), *cutter));
+            idx.iter()
+                .map(|&i| {
+                    let (a0, b0) = (start(i).tip, toolpath.moves[i].pose.tip);
+                    let Ok(dc) = &dc else {
+                        return (i, f64::NAN, a0);
+                    };
+                    let (a, b) = (frame.to(a0), frame.to(b0));
+                    if a.x == b.x && a.y == b.y {
+                        let (low, low0) = if a.z <= b.z { (a, a0) } else { (b, b0) };
+                        let depth = dc.drop(a.x, a.y).map_or(0.0, |z| (z - low.z).max(0.0));
+                        return (i, depth, low0);
+                    }
+                    let r = dc.chord_rise((a.x, a.y), (b.x, b.y), a.z, b.z, 0.0, f64::INFINITY);
+                    (i, r.rise_mm.max(0.0), a0.lerp(b0, r.at))
+                })
+                .collect::<Vec<_>>()
         })
         .collect();
-    let max_depth_mm = depths.iter().map(|d| d.0).fold(0.0, f64::max);
-    let collisions = checked
+    depths.sort_by_key(|d| d.0);
+    // A group whose turned part could not be built (not expected: turning keeps lengths)
+    // is left unchecked.
+    let lost = depths.iter().filter(|d| d.1.is_nan()).count();
+    depths.retain(|d| !d.1.is_nan());
+    let max_depth_mm = depths.iter().map(|d| d.1).fold(0.0, f64::max);
+    let collisions = depths
         .iter()
-        .zip(&depths)
-        .filter(|(_, d)| d.0 > tolerance_mm)
-        .map(|(&i, &(depth_mm, tip))| RapidCollision {
+        .filter(|d| d.1 > tolerance_mm)
+        .map(|&(i, depth_mm, tip)| RapidCollision {
             move_index: i,
             line: toolpath.moves[i].line,
             depth_mm,
@@ -105,9 +149,54 @@ pub fn check_rapids(
         })
         .collect();
     RapidReport {
-        checked: checked.len(),
-        unchecked: unchecked.len(),
+        checked: checked - lost,
+        tilted,
+        unchecked: unchecked + lost,
         max_depth_mm,
         collisions,
+    }
+}
+
+/// The frame in which a tool axis `k` is +Z: coordinates along `u`, `v` and `k`, with
+/// `(u, v, k)` orthonormal and right-handed (a rotation, so lengths and depths keep).
+#[derive(Debug, Clone, Copy)]
+struct AxisFrame {
+    u: DVec3,
+    v: DVec3,
+    k: DVec3,
+}
+
+impl AxisFrame {
+    fn new(k: DVec3) -> AxisFrame {
+        let k = k.normalize();
+        let (u, _) = k.any_orthonormal_pair();
+        AxisFrame {
+            u,
+            v: k.cross(u),
+            k,
+        }
+    }
+
+    /// `p` in the frame.
+    fn to(&self, p: DVec3) -> DVec3 {
+        DVec3::new(p.dot(self.u), p.dot(self.v), p.dot(self.k))
+    }
+
+    /// The part in the frame: `Ok(None)` when the frame is the identity (axis +Z), so a
+    /// 3-axis program's rapids are measured on the part as given.
+    fn turn_mesh(&self, part: &Mesh) -> Result<Option<Mesh>, cam_core::MeshError> {
+        if self.k == DVec3::Z {
+            return Ok(None);
+        }
+        let tris = part
+            .triangles()
+            .iter()
+            .map(|t| Triangle::new(self.to(t.v[0]), self.to(t.v[1]), self.to(t.v[2])))
+            .collect();
+        Mesh::from_triangles(
+            tris,
+            part.source().unwrap_or(std::path::Path::new("<part>")),
+        )
+        .map(Some)
     }
 }

@@ -393,6 +393,49 @@ fn a_rapid_through_the_part_fails_the_check() {
     }
 }
 
+/// A rapid with the tool axis tilted (3+2 positioning) through the part is a crash too:
+/// `cam verify` checks it in the frame of its axis, names its line and depth (along the
+/// axis, in closed form: a ball rests on the top face once its centre is `R` above it, a flat
+/// end mill once its lowest rim point is on it) and exits 1. (It was counted unchecked.)
+#[test]
+fn a_tilted_rapid_through_the_part_fails_the_check() {
+    let d = tempfile::tempdir().unwrap();
+    let part = write(d.path(), "box.obj", &box_obj(0.0, 10.0));
+    // Axis (0.6, 0, 0.8): down beside the box, through it 2 mm under its top (z = 5), then
+    // a feed up clear of it.
+    let k = "0.6,0,0.8";
+    let apt = write(
+        d.path(),
+        "tilted.apt",
+        &format!(
+            "UNITS/MM\nRAPID\nGOTO/2,-10,20,{k}\nRAPID\nGOTO/2,-10,3,{k}\nRAPID\n\
+             GOTO/2,20,3,{k}\nGOTO/2,20,20,{k}\n"
+        ),
+    );
+    let (kx, kz, r) = (0.6, 0.8, 3.0);
+    for (tool, want) in [
+        // Centre at 3 + R·kz; it must rise along k until it is R above z = 5.
+        ("ball:6", (r - (3.0 + r * kz - 5.0)) / kz),
+        // The lowest rim point is R·kx below the tip; it must rise to z = 5.
+        ("flat:6", (5.0 + r * kx - 3.0) / kz),
+    ] {
+        let o = verify_json(&apt, &part, tool, &[]);
+        assert_eq!(o.status.code(), Some(1), "{tool}: {}", stderr(&o));
+        assert!(stderr(&o).contains("line 7"), "{tool}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let rp = &j["rapids"];
+        assert_eq!(
+            (&rp["checked"], &rp["tilted"], &rp["unchecked"]),
+            (&3.into(), &3.into(), &0.into()),
+            "{tool}: {rp}"
+        );
+        let c = rp["collisions"].as_array().unwrap();
+        assert_eq!(c.len(), 1, "{tool}: {rp}");
+        let depth = c[0]["depth_mm"].as_f64().unwrap();
+        assert!((depth - want).abs() < 1e-9, "{tool}: {depth} (want {want})");
+    }
+}
+
 /// The twisted blade of the 5-axis tests (`cam_verify::testpaths`).
 const BLADE: cam_verify::testpaths::TestSurface = cam_verify::testpaths::TestSurface::Blade {
     twist_rad_per_mm: 0.01,
