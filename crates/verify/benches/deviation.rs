@@ -30,6 +30,7 @@ fn bench(c: &mut Criterion) {
         max_vertices: None,
         on_cap: CapPolicy::Error,
         region: None,
+        remesh: true,
     };
     let mut g = c.benchmark_group("deviation");
     g.sample_size(10);

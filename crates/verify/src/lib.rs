@@ -14,6 +14,7 @@ pub mod pipeline;
 pub mod ply;
 pub mod rapids;
 pub mod refine;
+pub mod remesh;
 pub mod report;
 pub mod sweep;
 pub mod testpaths;

@@ -1,16 +1,19 @@
 //! Refinement of the design surface for the normal-vector method (imprint paper §3.4).
 //!
 //! The design mesh is welded (corners with bit-identical coordinates become one vertex),
-//! then refined by conforming longest-edge bisection (Rivara's 4-triangle partition) until no
-//! edge is longer than `s`.
+//! remeshed into near-equilateral faces ([`crate::remesh`]), then refined by conforming
+//! longest-edge bisection (Rivara's 4-triangle partition) until no edge is longer than `s`.
 //! With the paper's rule `s = sqrt(6·r·e)` a sphere of radius `r` (the pseudo-insert radius,
 //! i.e. the cutter's corner radius) cannot sink deeper than `e` into an equilateral triangle
-//! of side `s` without covering one of its vertices, so sampling the vertices bounds the
-//! undetected gouge by `e`.
+//! of side `s` without covering one of its vertices (nor into any triangle whose edges are
+//! at most `s`: its smallest enclosing circle is no larger), so sampling the vertices bounds
+//! the undetected gouge by `e`. Bisection alone leaves right-angled faces with edges between
+//! `s/2` and `s`; the remesh reaches the same bound with 0.2–0.6 times the vertices, each one
+//! normal vector fewer to measure.
 //!
-//! Every new vertex is the midpoint of an edge of a triangle that lies inside one original
-//! triangle, so all refined faces lie exactly (up to rounding of midpoints) on the design
-//! surface; `face_source` names that original triangle.
+//! Every new vertex lies on an edge of an original triangle or inside it, in its plane, so
+//! all refined faces lie exactly (up to rounding) on the design surface; `face_source` names
+//! that original triangle.
 //!
 //! Vertex normals are angle-weighted averages of the normals of incident faces in the same
 //! smooth group: a face contributes to a corner's normal only when its normal is within
@@ -51,6 +54,10 @@ pub struct RefineConfig {
     /// verification passes the box within which a normal vector can meet the swept volume:
     /// outside it no vertex can read anything but "nothing swept".
     pub region: Option<[f64; 6]>,
+    /// Remesh the faces into near-equilateral triangles before bisecting (default; see
+    /// [`crate::remesh`]): about half the vertices for the same edge bound. `false`
+    /// bisects the design faces alone, so a square's vertices stay on a dyadic grid.
+    pub remesh: bool,
 }
 
 impl RefineConfig {
@@ -64,6 +71,7 @@ impl RefineConfig {
             max_vertices: Some(20_000_000),
             on_cap: CapPolicy::Error,
             region: None,
+            remesh: true,
         }
     }
 }
@@ -143,7 +151,7 @@ impl RefinedMesh {
 
 /// A small deterministic hasher for integer keys (FxHash-style multiply-rotate).
 #[derive(Default)]
-struct IntHasher(u64);
+pub(crate) struct IntHasher(u64);
 
 impl Hasher for IntHasher {
     fn finish(&self) -> u64 {
@@ -161,7 +169,7 @@ impl Hasher for IntHasher {
 
 type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<IntHasher>>;
 
-fn edge_key(a: u32, b: u32) -> u64 {
+pub(crate) fn edge_key(a: u32, b: u32) -> u64 {
     let (lo, hi) = if a < b { (a, b) } else { (b, a) };
     (u64::from(lo) << 32) | u64::from(hi)
 }
@@ -291,7 +299,19 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
     let area: f64 = mesh.triangles().iter().map(|t| t.area()).sum();
     let mut s = cfg.max_edge_mm;
     loop {
-        match split_edges(&welded_pos, &welded_tris, s, cfg.max_vertices, cfg.region) {
+        // Near-equilateral faces first (see `crate::remesh`), then bisection where an edge
+        // is still longer than `s`.
+        let (pos0, tris0, src0) = if cfg.remesh {
+            let r = crate::remesh::remesh(&welded_pos, &welded_tris, s, cfg.region);
+            (r.pos, r.tris, r.src)
+        } else {
+            (
+                welded_pos.clone(),
+                welded_tris.clone(),
+                (0..welded_tris.len() as u32).collect(),
+            )
+        };
+        match split_edges(&pos0, &tris0, src0, s, cfg.max_vertices, cfg.region) {
             Ok((pos, tris, src)) => {
                 let (positions, normals, triangles) =
                     vertex_normals(mesh, &pos, &tris, &src, cfg.crease_angle_deg);
@@ -329,6 +349,14 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
     }
 }
 
+/// Whether a face meets the region (its box against the region's; everywhere without one).
+pub(crate) fn meets_region(region: Option<[f64; 6]>, pos: &[DVec3], t: &[u32; 3]) -> bool {
+    let Some(r) = region else { return true };
+    let [a, b, c] = t.map(|i| pos[i as usize]);
+    let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+    lo.x <= r[3] && hi.x >= r[0] && lo.y <= r[4] && hi.y >= r[1] && lo.z <= r[5] && hi.z >= r[2]
+}
+
 /// The index `k` of the longest edge `t[k] → t[k+1]` of a face; ties go to the smaller edge
 /// key, so the choice does not depend on how the face's corners are rotated.
 fn longest_edge(pos: &[DVec3], t: &[u32; 3]) -> usize {
@@ -359,17 +387,12 @@ fn longest_edge(pos: &[DVec3], t: &[u32; 3]) -> usize {
 fn split_edges(
     pos0: &[DVec3],
     tris0: &[[u32; 3]],
+    src0: Vec<u32>,
     s: f64,
     cap: Option<usize>,
     region: Option<[f64; 6]>,
 ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>), usize> {
-    // Whether a face meets the region (its box against the region's).
-    let inside = |pos: &[DVec3], t: &[u32; 3]| {
-        let Some(r) = region else { return true };
-        let [a, b, c] = t.map(|i| pos[i as usize]);
-        let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-        lo.x <= r[3] && hi.x >= r[0] && lo.y <= r[4] && hi.y >= r[1] && lo.z <= r[5] && hi.z >= r[2]
-    };
+    let inside = |pos: &[DVec3], t: &[u32; 3]| meets_region(region, pos, t);
     let s2 = s * s;
     let mut pos = pos0.to_vec();
     if let Some(c) = cap
@@ -382,7 +405,7 @@ fn split_edges(
     let mut done: Vec<[u32; 3]> = Vec::with_capacity(tris0.len());
     let mut done_src: Vec<u32> = Vec::with_capacity(tris0.len());
     let mut tris = tris0.to_vec();
-    let mut src: Vec<u32> = (0..tris0.len() as u32).collect();
+    let mut src = src0;
     // Faces outside the region with an edge longer than s: split only when a neighbour's
     // split reaches them (to stay conforming), else final once nothing is active.
     let mut dormant: Vec<([u32; 3], u32, usize)> = Vec::new();

@@ -12,6 +12,7 @@ fn cfg(s: f64) -> RefineConfig {
         max_vertices: None,
         on_cap: CapPolicy::Error,
         region: None,
+        remesh: true,
     }
 }
 
@@ -396,4 +397,46 @@ fn region_refines_only_where_asked_and_stays_conforming() {
     let (nf, np) = (full.positions.len(), part.positions.len());
     eprintln!("region refinement: {np} vertices against {nf} for the whole cube");
     assert!(np * 3 < nf, "{np} vs {nf}");
+}
+
+/// Remeshing into near-equilateral faces keeps every guarantee of the refinement (edges ≤ s,
+/// faces inside their sources with their orientation and area, closed meshes conforming)
+/// with far fewer vertices than bisection alone: measured 0.61×, 0.25× and 0.60× on the
+/// dome, fillet and pocket at s = 0.5 (0.56×, 0.20× and 0.41× at a ball:6's 0.3).
+#[test]
+fn remeshing_keeps_the_guarantees_with_far_fewer_vertices() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/parts");
+    let s = 0.5;
+    for name in ["dome.obj", "fillet.obj", "pocket.obj"] {
+        let m = Mesh::load(root.join(name), cam_core::Units::Mm).unwrap();
+        let bisected = refine::refine(
+            &m,
+            &RefineConfig {
+                remesh: false,
+                ..cfg(s)
+            },
+        )
+        .unwrap();
+        let r = refine::refine(&m, &cfg(s)).unwrap();
+        edges_ok(&r, s);
+        on_source(&r, &m);
+        // Conforming: the parts are closed, so every undirected edge (by position: creases
+        // duplicate vertices) has two faces.
+        let key = |i: u32| r.positions[i as usize].to_array().map(f64::to_bits);
+        let mut uses: HashMap<_, u32> = HashMap::new();
+        for t in &r.triangles {
+            for k in 0..3 {
+                let (a, b) = (key(t[k]), key(t[(k + 1) % 3]));
+                *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        assert!(uses.values().all(|&n| n == 2), "{name}: not conforming");
+        let ratio = r.positions.len() as f64 / bisected.positions.len() as f64;
+        eprintln!(
+            "{name}: {} vertices remeshed, {} bisected ({ratio:.2}×)",
+            r.positions.len(),
+            bisected.positions.len()
+        );
+        assert!(ratio < 0.65, "{name}: {ratio}");
+    }
 }

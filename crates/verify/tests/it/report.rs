@@ -107,6 +107,7 @@ fn coloured() -> (RefinedMesh, Vec<Deviation>) {
             max_vertices: None,
             on_cap: CapPolicy::Error,
             region: None,
+            remesh: true,
         },
     )
     .unwrap();

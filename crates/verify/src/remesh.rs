@@ -1,0 +1,413 @@
+//! Near-equilateral remeshing of the design faces, the first step of the refinement
+//! ([`crate::refine`]).
+//!
+//! Longest-edge bisection alone ends with right-angled faces whose edges lie between `s/2`
+//! and `s`: on the dome about 3.3 times as many faces as equilateral triangles of side `s`
+//! would need, each vertex one normal vector to measure. So each face whose longest edge
+//! exceeds `s` is first remeshed in its own plane:
+//!
+//! * every edge longer than `s` next to such a face is divided into `⌈L/s⌉` equal parts (the
+//!   same points for both faces sharing it, so the mesh stays conforming);
+//! * the face's interior gets a triangular lattice of spacing `LATTICE · s`, rows parallel to
+//!   its first edge from its first corner, kept half a spacing from the sides;
+//! * boundary and lattice points are joined by a constrained Delaunay triangulation (spade)
+//!   of the face's plane, and only the triangles inside the boundary are kept.
+//!
+//! Inner edges still longer than `s` (where the lattice meets the boundary) get their
+//! midpoints inserted until none is left; whatever is left longer (faces only partly in the
+//! region) the conforming bisection splits. Every new vertex lies on its face (an edge point
+//! or a point of the face's plane inside it), so the refined faces lie on the design surface
+//! as before. With a region, faces that do not meet it are left alone, and new points (on
+//! edges and inside) are placed only within `s` of it: the faces that do meet it are cut
+//! exactly as without a region, so the region changes no reading.
+//!
+//! A face whose triangulation is not what it must be (a conflict, a lost point, a count that
+//! a triangulation of that polygon cannot have) is fanned from its centroid instead, and the
+//! bisection finishes it: a fallback, never a panic. None of the bundled or shared fixtures
+//! needs it.
+
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
+use cam_core::DVec3;
+use rayon::prelude::*;
+use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+
+/// Lattice spacing as a share of the longest edge allowed.
+pub const LATTICE: f64 = 0.9;
+
+/// Rounds of midpoint insertion per face before giving up on it (the bisection then
+/// finishes).
+const MAX_ROUNDS: usize = 8;
+
+/// The remeshed design surface: positions, faces (oriented as their sources) and each
+/// face's source face.
+pub(crate) struct Remeshed {
+    pub pos: Vec<DVec3>,
+    pub tris: Vec<[u32; 3]>,
+    pub src: Vec<u32>,
+}
+
+type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<crate::refine::IntHasher>>;
+
+/// A face's vertex in its local triangulation: a boundary point (global index) or its
+/// `i`-th lattice point.
+#[derive(Clone, Copy)]
+enum Local {
+    Global(u32),
+    Lattice(u32),
+}
+
+/// One face's remesh: its lattice points and triangles.
+struct FaceMesh {
+    lattice: Vec<DVec3>,
+    tris: Vec<[Local; 3]>,
+}
+
+/// Remeshes the faces `tris0` (on `pos0`) that meet `region` (all without one) and whose
+/// longest edge exceeds `s` (see the module documentation); faces sharing a divided edge
+/// with them are re-triangulated on their boundary points only.
+pub(crate) fn remesh(
+    pos0: &[DVec3],
+    tris0: &[[u32; 3]],
+    s: f64,
+    region: Option<[f64; 6]>,
+) -> Remeshed {
+    let len = |a: u32, b: u32| pos0[a as usize].distance(pos0[b as usize]);
+    let active: Vec<bool> = tris0
+        .par_iter()
+        .map(|t| {
+            (0..3).any(|k| len(t[k], t[(k + 1) % 3]) > s)
+                && crate::refine::meets_region(region, pos0, t)
+        })
+        .collect();
+    // New points only within `s` of the region (the rest of a face that reaches out of it
+    // keeps long triangles, as the bisection would).
+    let near = |p: DVec3| {
+        region.is_none_or(|r| {
+            p.cmpge(DVec3::new(r[0], r[1], r[2]) - s).all()
+                && p.cmple(DVec3::new(r[3], r[4], r[5]) + s).all()
+        })
+    };
+    // Divided edges: key -> (first new vertex, count), points from the lower-numbered end.
+    let mut pos = pos0.to_vec();
+    let mut divided: IntMap<u64, (u32, u32)> = IntMap::default();
+    for (t, _) in tris0.iter().zip(&active).filter(|(_, a)| **a) {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            let l = len(a, b);
+            let key = crate::refine::edge_key(a, b);
+            if l <= s || divided.contains_key(&key) {
+                continue;
+            }
+            // A hair over L/s so that the parts are ≤ s despite rounding.
+            let m = (l / s * (1.0 + 1e-12)).ceil() as u32;
+            let (lo, hi) = (a.min(b), a.max(b));
+            let (p, q) = (pos0[lo as usize], pos0[hi as usize]);
+            let first = pos.len() as u32;
+            for i in 1..m {
+                let e = p + (f64::from(i) / f64::from(m)) * (q - p);
+                if near(e) {
+                    pos.push(e);
+                }
+            }
+            divided.insert(key, (first, pos.len() as u32 - first));
+        }
+    }
+    let meshes: Vec<Option<FaceMesh>> = tris0
+        .par_iter()
+        .zip(&active)
+        .map(|(t, &act)| {
+            let touched = (0..3)
+                .any(|k| divided.contains_key(&crate::refine::edge_key(t[k], t[(k + 1) % 3])));
+            if !act && !touched {
+                return None;
+            }
+            let fm = face_mesh(
+                pos0,
+                &pos,
+                &divided,
+                t,
+                if act { LATTICE * s } else { 0.0 },
+                s,
+                &near,
+            );
+            Some(fm.unwrap_or_else(|| fan(pos0, &divided, t)))
+        })
+        .collect();
+    let mut tris = Vec::with_capacity(tris0.len());
+    let mut src = Vec::with_capacity(tris0.len());
+    for (f, (t, m)) in tris0.iter().zip(meshes).enumerate() {
+        match m {
+            None => {
+                tris.push(*t);
+                src.push(f as u32);
+            }
+            Some(fm) => {
+                let base = pos.len() as u32;
+                pos.extend_from_slice(&fm.lattice);
+                for lt in fm.tris {
+                    tris.push(lt.map(|l| match l {
+                        Local::Global(g) => g,
+                        Local::Lattice(i) => base + i,
+                    }));
+                    src.push(f as u32);
+                }
+            }
+        }
+    }
+    Remeshed { pos, tris, src }
+}
+
+/// The boundary points of face `t` (global indices, in its own order): corners and the
+/// points of its divided edges.
+fn boundary(divided: &IntMap<u64, (u32, u32)>, t: &[u32; 3]) -> Vec<u32> {
+    let mut ids = Vec::new();
+    for k in 0..3 {
+        let (p, q) = (t[k], t[(k + 1) % 3]);
+        ids.push(p);
+        if let Some(&(first, n)) = divided.get(&crate::refine::edge_key(p, q)) {
+            let run = first..first + n;
+            if p < q {
+                ids.extend(run);
+            } else {
+                ids.extend(run.rev());
+            }
+        }
+    }
+    ids
+}
+
+/// A face whose triangulation failed its checks: its boundary points joined to its centroid,
+/// which lies strictly inside, so every triangle keeps the face's orientation (the
+/// bisection then splits what is longer than `s`).
+fn fan(pos0: &[DVec3], divided: &IntMap<u64, (u32, u32)>, t: &[u32; 3]) -> FaceMesh {
+    let ids = boundary(divided, t);
+    let centroid = t.iter().map(|&i| pos0[i as usize]).sum::<DVec3>() / 3.0;
+    let n = ids.len();
+    FaceMesh {
+        lattice: vec![centroid],
+        tris: (0..n)
+            .map(|i| {
+                [
+                    Local::Global(ids[i]),
+                    Local::Global(ids[(i + 1) % n]),
+                    Local::Lattice(0),
+                ]
+            })
+            .collect(),
+    }
+}
+
+/// The triangulation of face `t`: its boundary (corners and the points of its divided
+/// edges, in its own order) and, when `h > 0`, a lattice of spacing `h` inside.
+fn face_mesh(
+    pos0: &[DVec3],
+    pos: &[DVec3],
+    divided: &IntMap<u64, (u32, u32)>,
+    t: &[u32; 3],
+    h: f64,
+    s: f64,
+    near: &dyn Fn(DVec3) -> bool,
+) -> Option<FaceMesh> {
+    let [a, b, c] = t.map(|i| pos0[i as usize]);
+    let x = (b - a).normalize();
+    let y = (b - a).cross(c - a).normalize().cross(x);
+    if !(x.is_finite() && y.is_finite()) {
+        return None;
+    }
+    let to2 = |p: DVec3| Point2::new((p - a).dot(x), (p - a).dot(y));
+    // Boundary, counter-clockwise in the face's frame.
+    let ids = boundary(divided, t);
+    let mut pts: Vec<Point2<f64>> = ids.iter().map(|&i| to2(pos[i as usize])).collect();
+    let nb = pts.len();
+    // The lattice: rows parallel to the first edge (y = 0), √3/2·h apart, each centred
+    // between the other two sides less h/2.
+    let mut lattice = Vec::new();
+    if h > 0.0 {
+        let (c2, b2) = (to2(c), to2(b));
+        let margin = 0.5 * h;
+        // Distance from (px, py) to the lines a–c and b–c: linear in px along a row; the
+        // interior lies left of a→b, b→c and c→a.
+        let side = |p0: Point2<f64>, p1: Point2<f64>| {
+            let (dx, dy) = (p1.x - p0.x, p1.y - p0.y);
+            let l = (dx * dx + dy * dy).sqrt();
+            // Signed distance (positive inside) = (dx·(py − p0y) − dy·(px − p0x)) / l.
+            (dx / l, dy / l, p0)
+        };
+        let sides = [side(b2, c2), side(c2, Point2::new(0.0, 0.0))];
+        let dy_row = 0.5 * 3f64.sqrt() * h;
+        let mut j = 1;
+        loop {
+            let py = f64::from(j) * dy_row;
+            if py >= c2.y - margin {
+                break;
+            }
+            // The interval of px where both distances are ≥ margin.
+            let (mut u0, mut u1) = (f64::NEG_INFINITY, f64::INFINITY);
+            for &(ux, uy, p0) in &sides {
+                // ux·(py − p0.y) − uy·(px − p0.x) ≥ margin.
+                let k0 = ux * (py - p0.y) + uy * p0.x - margin;
+                // k0 − uy·px ≥ 0.
+                if uy > 0.0 {
+                    u1 = u1.min(k0 / uy);
+                } else if uy < 0.0 {
+                    u0 = u0.max(k0 / uy);
+                } else if k0 < 0.0 {
+                    u1 = f64::NEG_INFINITY;
+                }
+            }
+            // Lattice columns: odd rows shifted by h/2, so neighbouring rows make
+            // equilateral triangles.
+            let shift = if j % 2 == 1 { 0.5 * h } else { 0.0 };
+            let i0 = ((u0 - shift) / h).ceil();
+            let mut px = shift + i0 * h;
+            while px <= u1 {
+                let p = a + px * x + py * y;
+                if near(p) {
+                    pts.push(Point2::new(px, py));
+                    lattice.push(p);
+                }
+                px += h;
+            }
+            j += 1;
+        }
+    }
+    let edges: Vec<[usize; 2]> = (0..nb).map(|i| [i, (i + 1) % nb]).collect();
+    let n_in = pts.len();
+    let mut conflict = false;
+    let mut cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+        ConstrainedDelaunayTriangulation::try_bulk_load_cdt(pts, edges, |_| conflict = true)
+            .ok()?;
+    if conflict || cdt.num_vertices() != n_in {
+        return None;
+    }
+    // Inner edges still longer than `s` (where the lattice meets the boundary) get their
+    // midpoints, strictly inside the face, until none is left: the boundary, whose parts are
+    // at most `s`, is never touched, so the faces around stay conforming.
+    if h > 0.0 {
+        let (b2, c2) = (to2(b), to2(c));
+        let inside = |p: Point2<f64>| {
+            let cross = |o: Point2<f64>, q: Point2<f64>| {
+                (q.x - o.x) * (p.y - o.y) - (q.y - o.y) * (p.x - o.x)
+            };
+            let tol = 1e-9 * s * s;
+            cross(Point2::new(0.0, 0.0), b2) > tol
+                && cross(b2, c2) > tol
+                && cross(c2, Point2::new(0.0, 0.0)) > tol
+        };
+        for _ in 0..MAX_ROUNDS {
+            let mids: Vec<Point2<f64>> = cdt
+                .undirected_edges()
+                .filter(|e| !e.is_constraint_edge())
+                .filter_map(|e| {
+                    let [p, q] = e.positions();
+                    let (dx, dy) = (q.x - p.x, q.y - p.y);
+                    let m = Point2::new(0.5 * (p.x + q.x), 0.5 * (p.y + q.y));
+                    (dx * dx + dy * dy > s * s && inside(m) && near(a + m.x * x + m.y * y))
+                        .then_some(m)
+                })
+                .collect();
+            if mids.is_empty() {
+                break;
+            }
+            for m in mids {
+                let before = cdt.num_vertices();
+                cdt.insert(m).ok()?;
+                if cdt.num_vertices() != before + 1 {
+                    return None;
+                }
+                lattice.push(a + m.x * x + m.y * y);
+            }
+        }
+    }
+    // Faces outside the boundary: reached from the outer face without crossing it.
+    let mut outside = vec![false; cdt.num_all_faces()];
+    let mut stack = Vec::new();
+    for f in cdt.inner_faces() {
+        for e in f.adjacent_edges() {
+            if e.rev().face().as_inner().is_none() && !e.as_undirected().is_constraint_edge() {
+                stack.push(f.fix());
+            }
+        }
+    }
+    while let Some(fh) = stack.pop() {
+        let f = cdt.face(fh);
+        let i = fh.index();
+        if outside[i] {
+            continue;
+        }
+        outside[i] = true;
+        for e in f.adjacent_edges() {
+            if e.as_undirected().is_constraint_edge() {
+                continue;
+            }
+            if let Some(g) = e.rev().face().as_inner()
+                && !outside[g.fix().index()]
+            {
+                stack.push(g.fix());
+            }
+        }
+    }
+    let tris: Vec<[Local; 3]> = cdt
+        .inner_faces()
+        .filter(|f| !outside[f.fix().index()])
+        .map(|f| {
+            f.vertices().map(|v| {
+                let i = v.fix().index();
+                if i < nb {
+                    Local::Global(ids[i])
+                } else {
+                    Local::Lattice((i - nb) as u32)
+                }
+            })
+        })
+        .collect();
+    // A triangulation of a polygon with `nb` boundary and `l` inner points has nb + 2l − 2
+    // triangles.
+    if tris.len() != nb + 2 * lattice.len() - 2 {
+        return None;
+    }
+    Some(FaceMesh { lattice, tris })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The fallback fan covers the face with its orientation: as many triangles as boundary
+    /// points, each turning as the face does, their areas summing to the face's.
+    #[test]
+    fn fan_covers_the_face_with_its_orientation() {
+        let pos0 = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(4.0, 0.0, 1.0),
+            DVec3::new(1.0, 3.0, 2.0),
+        ];
+        let t = [0u32, 1, 2];
+        let mut pos = pos0.clone();
+        let mut divided: IntMap<u64, (u32, u32)> = IntMap::default();
+        // Edge 0–1 divided in four, edge 2–0 in two.
+        divided.insert(crate::refine::edge_key(0, 1), (3, 3));
+        for i in 1..4 {
+            pos.push(pos0[0].lerp(pos0[1], f64::from(i) / 4.0));
+        }
+        divided.insert(crate::refine::edge_key(2, 0), (6, 1));
+        pos.push(pos0[0].lerp(pos0[2], 0.5));
+        let fm = fan(&pos0, &divided, &t);
+        assert_eq!(fm.tris.len(), 7);
+        let n = (pos0[1] - pos0[0]).cross(pos0[2] - pos0[0]);
+        let at = |l: Local| match l {
+            Local::Global(g) => pos[g as usize],
+            Local::Lattice(i) => fm.lattice[i as usize],
+        };
+        let mut area = 0.0;
+        for tri in &fm.tris {
+            let [a, b, c] = tri.map(at);
+            let cr = (b - a).cross(c - a);
+            assert!(cr.dot(n) > 0.0, "a fan triangle is flipped or flat");
+            area += 0.5 * cr.length();
+        }
+        assert!((area - 0.5 * n.length()).abs() < 1e-12, "{area}");
+    }
+}
