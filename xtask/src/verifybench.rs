@@ -306,15 +306,18 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     );
     println!(
         "Stage timings are from the best verify run (Verification::timings): sweep = forward \
-         and back-gouge sweep models (imprint curves), refine = design-surface refinement, \
+         and back-gouge sweep models (imprint curves; a program of translations, every plan \
+         here, is measured without them, so only the check that something sweeps is left), \
+         refine = design-surface refinement (remesh, then bisection), \
          measure = each normal vector's first entry into the exact swept volume (for a \
          program of translations, every plan here, a direct search over the moves' volumes; \
          otherwise crossings of the imprint surface refined onto it), the material clip and \
          crease depths; other = the rest (report)."
     );
     println!(
-        "\nMeasure stage of the best run: strips and caps of the forward sweep (the back-gouge \
-         sweep holds rotating moves only), exact refinements (exact entries tried: one per \
+        "\nMeasure stage of the best run: strips and caps of the forward sweep (both sweeps \
+         hold rotating moves only unless the imprint surface is measured or kept: 0 for the \
+         plans here), exact refinements (exact entries tried: one per \
          move, column or cap tried per vector) and vectors whose crossings could not be refined:\n\n{breakdown}"
     );
     five_axis_bench(pc.runs)?;

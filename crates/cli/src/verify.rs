@@ -204,6 +204,7 @@ pub fn run_verification(
     cfg.sweep.max_step_mm = o.max_step;
     cfg.resolution_mm = o.resolution;
     cfg.back_gouge = !o.no_back_gouge;
+    cfg.keep_swept = o.swept.is_some();
     cfg.surface = match o.surface {
         Surface::Exact => cam_verify::measure::SurfaceModel::Exact,
         Surface::Linear => cam_verify::measure::SurfaceModel::Linear,

@@ -260,6 +260,13 @@ struct Segment {
 }
 
 impl SweepModel {
+    /// Whether sweeping `cutter` along `toolpath` with `cfg` gives any piece: some run of
+    /// feed moves (rotating ones only, with `cfg.rotating_only`) moves the tool. Cheap: no
+    /// imprint curve is computed.
+    pub fn sweeps_anything(toolpath: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> bool {
+        !stretches(toolpath, cutter, cfg).is_empty()
+    }
+
     /// Builds the model of the sweep of `cutter` along the feed moves of `toolpath`
     /// (see [`crate::sweep`] for what sweeps and where the surface breaks). Curves are
     /// computed in parallel; the result does not depend on the number of threads.

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use cam_core::{Cutter, DVec3, Mesh, Toolpath};
+use cam_core::{Cutter, DVec3, Mesh, MoveKind, Toolpath};
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError, TriangleBvh};
 use crate::material;
@@ -40,6 +40,10 @@ pub struct VerifyConfig {
     /// volume (same deviations; more vertices, for a finely coloured `--deviation` mesh of
     /// parts the path covers only in part).
     pub refine_everywhere: bool,
+    /// Build the forward imprint surface even when the measurement does not use it (a
+    /// program of translations measured against the exact volume): for exporting it
+    /// ([`Verification::swept_surface`], `--swept`).
+    pub keep_swept: bool,
 }
 
 impl VerifyConfig {
@@ -54,6 +58,7 @@ impl VerifyConfig {
             max_vertices: Some(20_000_000),
             surface: SurfaceModel::Exact,
             refine_everywhere: false,
+            keep_swept: false,
         }
     }
 }
@@ -111,7 +116,8 @@ pub struct Verification {
     /// Signed deviation per refined vertex (negative = gouge).
     pub deviations: Vec<Deviation>,
     /// The forward sweep (imprint curves and pieces); [`Verification::swept_surface`] gives
-    /// its triangles.
+    /// its triangles. Empty for a program of translations measured exactly, unless
+    /// [`VerifyConfig::keep_swept`].
     pub swept: SweepModel,
     /// What the measurement did (refinements, crossings kept linear).
     pub stats: MeasureStats,
@@ -423,10 +429,25 @@ pub fn verify_with_progress(
 
     let t = Instant::now();
     report_stage(Stage::Sweep, 0, 1);
-    let swept = SweepModel::new(toolpath, cutter, &cfg.sweep);
-    if swept.pieces.is_empty() {
+    if !SweepModel::sweeps_anything(toolpath, cutter, &cfg.sweep) {
         return Err(VerifyError::NothingSwept);
     }
+    // The exact measurement of a program whose feed moves all keep their axis reads the
+    // moves' volumes directly (`measure`): the forward imprint surface is then built only
+    // when asked for, and holds the rotating moves (none) otherwise.
+    let rotating = toolpath
+        .moves
+        .windows(2)
+        .any(|w| w[1].kind != MoveKind::Rapid && w[0].pose.axis != w[1].pose.axis);
+    let imprint_used = cfg.surface == SurfaceModel::Linear || rotating || cfg.keep_swept;
+    let swept = SweepModel::new(
+        toolpath,
+        cutter,
+        &SweepConfig {
+            rotating_only: !imprint_used,
+            ..cfg.sweep
+        },
+    );
     let reverse = cfg.back_gouge.then(|| {
         SweepModel::new(
             toolpath,

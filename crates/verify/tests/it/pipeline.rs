@@ -296,3 +296,38 @@ fn settings_beyond_memory_or_reach_are_config_errors() {
     let poses = cam_verify::model::pose_count(&path, &cutter, &VerifyConfig::new(0.01).sweep);
     assert_eq!(poses, 10.0 + 48.0 + 10.0);
 }
+
+/// A program of translations is measured against the moves' exact volumes, not the imprint
+/// surface: that surface is built only when kept (for `--swept`), and keeping it changes no
+/// reading. A rotating program builds it, since its crossings are located on it.
+#[test]
+fn the_imprint_surface_is_built_only_when_used_or_kept() {
+    let cutter = Cutter::bull(6.0, 1.0).unwrap();
+    let part = box_mesh(-60.0, 0.0);
+    let path = pass(-5.0, -0.05);
+    let mut cfg = VerifyConfig::new(0.01);
+    cfg.resolution_mm = 0.02;
+    let lean = verify(&part, &path, &cutter, &cfg).unwrap();
+    cfg.keep_swept = true;
+    let kept = verify(&part, &path, &cutter, &cfg).unwrap();
+    assert!(lean.swept.pieces.is_empty() && lean.swept.imprint_points == 0);
+    assert!(!kept.swept.pieces.is_empty() && kept.swept_surface().triangles.len() > 100);
+    assert_eq!(lean.deviations.len(), kept.deviations.len());
+    for (a, b) in lean.deviations.iter().zip(&kept.deviations) {
+        assert_eq!(a.signed_mm, b.signed_mm);
+        assert_eq!(a.source_move, b.source_move);
+    }
+    assert!(
+        (lean.report.max_gouge_mm - 0.05).abs() < 0.02,
+        "{}",
+        lean.report.max_gouge_mm
+    );
+    // The same pass with the axis turning along it: the imprint surface is measured.
+    let mut turning = path.clone();
+    let tilted = DVec3::new(0.0, 0.2, 1.0).normalize();
+    turning.moves[2].pose.axis = tilted;
+    turning.moves[3].pose.axis = tilted;
+    cfg.keep_swept = false;
+    let rot = verify(&part, &turning, &cutter, &cfg).unwrap();
+    assert!(!rot.swept.pieces.is_empty());
+}
