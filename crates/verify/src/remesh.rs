@@ -34,7 +34,7 @@ use rayon::prelude::*;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 
 /// Lattice spacing as a share of the longest edge allowed.
-pub const LATTICE: f64 = 0.9;
+pub const LATTICE: f64 = 0.95;
 
 /// Rounds of midpoint insertion per face before giving up on it (the bisection then
 /// finishes).

@@ -401,8 +401,8 @@ fn region_refines_only_where_asked_and_stays_conforming() {
 
 /// Remeshing into near-equilateral faces keeps every guarantee of the refinement (edges ≤ s,
 /// faces inside their sources with their orientation and area, closed meshes conforming)
-/// with far fewer vertices than bisection alone: measured 0.61×, 0.25× and 0.60× on the
-/// dome, fillet and pocket at s = 0.5 (0.56×, 0.20× and 0.41× at a ball:6's 0.3).
+/// with far fewer vertices than bisection alone: measured 0.60×, 0.24× and 0.55× on the
+/// dome, fillet and pocket at s = 0.5 (0.55×, 0.19× and 0.37× at a ball:6's 0.3).
 #[test]
 fn remeshing_keeps_the_guarantees_with_far_fewer_vertices() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/parts");
