@@ -440,3 +440,29 @@ fn remeshing_keeps_the_guarantees_with_far_fewer_vertices() {
         assert!(ratio < 0.65, "{name}: {ratio}");
     }
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(48))]
+    /// Thin and needle-like faces (one corner within `1e-6`–`1` mm of the opposite edge's
+    /// line) next to a regular one: the remesh either triangulates them or fans them, and
+    /// the refinement keeps its guarantees (edges ≤ s, faces inside their sources with their
+    /// orientation and area, the shared edge conforming) without a panic.
+    #[test]
+    fn thin_faces_keep_the_guarantees(
+        len in 1.0f64..20.0,
+        along in -0.5f64..1.5,
+        lift in -6.0f64..0.0,
+        s in 0.2f64..2.0,
+    ) {
+        let h = 10f64.powf(lift);
+        let (a, b) = (DVec3::new(0.0, 0.0, 0.0), DVec3::new(len, 0.0, 0.3));
+        let c = DVec3::new(along * len, h, 0.1);
+        let d = DVec3::new(0.3 * len, -3.0, -0.2);
+        let tris = vec![Triangle::new(a, b, c), Triangle::new(a, d, b)];
+        proptest::prop_assume!(tris.iter().all(|t| !t.is_degenerate()));
+        let m = mesh(tris);
+        let r = refine::refine(&m, &cfg(s)).unwrap();
+        edges_ok(&r, s);
+        on_source(&r, &m);
+    }
+}
