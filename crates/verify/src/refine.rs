@@ -302,17 +302,20 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
     loop {
         // Near-equilateral faces first (see `crate::remesh`), then bisection where an edge
         // is still longer than `s`.
-        let (pos0, tris0, src0) = if cfg.remesh {
-            let r = crate::remesh::remesh(&welded_pos, &welded_tris, s, cfg.region);
-            (r.pos, r.tris, r.src)
+        let start = if cfg.remesh {
+            crate::remesh::remesh(&welded_pos, &welded_tris, s, cfg.region, cfg.max_vertices)
+                .map(|r| (r.pos, r.tris, r.src))
         } else {
-            (
+            Ok((
                 welded_pos.clone(),
                 welded_tris.clone(),
                 (0..welded_tris.len() as u32).collect(),
-            )
+            ))
         };
-        match split_edges(&pos0, &tris0, src0, s, cfg.max_vertices, cfg.region) {
+        let refined = start.and_then(|(pos0, tris0, src0)| {
+            split_edges(&pos0, &tris0, src0, s, cfg.max_vertices, cfg.region)
+        });
+        match refined {
             Ok((pos, tris, src)) => {
                 let (positions, normals, triangles) =
                     vertex_normals(mesh, &pos, &tris, &src, cfg.crease_angle_deg);

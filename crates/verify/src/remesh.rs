@@ -66,13 +66,15 @@ struct FaceMesh {
 
 /// Remeshes the faces `tris0` (on `pos0`) that meet `region` (all without one) and whose
 /// longest edge exceeds `s` (see the module documentation); faces sharing a divided edge
-/// with them are re-triangulated on their boundary points only.
+/// with them are re-triangulated on their boundary points only. `Err(cap)` when the points
+/// would pass the vertex cap (checked before any face is triangulated).
 pub(crate) fn remesh(
     pos0: &[DVec3],
     tris0: &[[u32; 3]],
     s: f64,
     region: Option<[f64; 6]>,
-) -> Remeshed {
+    cap: Option<usize>,
+) -> Result<Remeshed, usize> {
     let len = |a: u32, b: u32| pos0[a as usize].distance(pos0[b as usize]);
     let active: Vec<bool> = tris0
         .par_iter()
@@ -112,6 +114,24 @@ pub(crate) fn remesh(
                 }
             }
             divided.insert(key, (first, pos.len() as u32 - first));
+        }
+    }
+    // Past the vertex cap before anything is triangulated: counted, not built (a face of a
+    // square metre at s = 0.05 mm would hold some 5e8 lattice points).
+    if let Some(c) = cap {
+        let room = c.saturating_sub(pos.len());
+        let lattice: usize = tris0
+            .par_iter()
+            .zip(&active)
+            .filter(|(_, a)| **a)
+            .map(|(t, _)| {
+                Frame::new(pos0, t).map_or(0, |fr| {
+                    lattice_points(&fr, LATTICE * s, &near, room + 1, |_, _, _| {})
+                })
+            })
+            .sum();
+        if pos.len() > c || lattice > room {
+            return Err(c);
         }
     }
     let meshes: Vec<Option<FaceMesh>> = tris0
@@ -156,7 +176,7 @@ pub(crate) fn remesh(
             }
         }
     }
-    Remeshed { pos, tris, src }
+    Ok(Remeshed { pos, tris, src })
 }
 
 /// The boundary points of face `t` (global indices, in its own order): corners and the
@@ -199,6 +219,91 @@ fn fan(pos0: &[DVec3], divided: &IntMap<u64, (u32, u32)>, t: &[u32; 3]) -> FaceM
     }
 }
 
+/// A face's plane: its corners, `x` along its first edge and `y` across it towards its
+/// third corner, so that the face runs counter-clockwise in `(x, y)`.
+struct Frame {
+    a: DVec3,
+    b: DVec3,
+    c: DVec3,
+    x: DVec3,
+    y: DVec3,
+}
+
+impl Frame {
+    fn new(pos0: &[DVec3], t: &[u32; 3]) -> Option<Frame> {
+        let [a, b, c] = t.map(|i| pos0[i as usize]);
+        let x = (b - a).normalize();
+        let y = (b - a).cross(c - a).normalize().cross(x);
+        (x.is_finite() && y.is_finite()).then_some(Frame { a, b, c, x, y })
+    }
+
+    fn to2(&self, p: DVec3) -> Point2<f64> {
+        Point2::new((p - self.a).dot(self.x), (p - self.a).dot(self.y))
+    }
+}
+
+/// Calls `f(px, py, p)` for each point of the face's lattice of spacing `h` (rows parallel
+/// to its first edge from its first corner, √3/2·h apart, odd rows shifted by h/2, kept h/2
+/// from the sides) for which `near(p)` holds, at most `limit` of them; returns how many.
+fn lattice_points(
+    frame: &Frame,
+    h: f64,
+    near: &dyn Fn(DVec3) -> bool,
+    limit: usize,
+    mut f: impl FnMut(f64, f64, DVec3),
+) -> usize {
+    let (c2, b2) = (frame.to2(frame.c), frame.to2(frame.b));
+    let margin = 0.5 * h;
+    // Distance from (px, py) to the lines b–c and c–a: linear in px along a row; the
+    // interior lies left of a→b, b→c and c→a.
+    let side = |p0: Point2<f64>, p1: Point2<f64>| {
+        let (dx, dy) = (p1.x - p0.x, p1.y - p0.y);
+        let l = (dx * dx + dy * dy).sqrt();
+        // Signed distance (positive inside) = (dx·(py − p0y) − dy·(px − p0x)) / l.
+        (dx / l, dy / l, p0)
+    };
+    let sides = [side(b2, c2), side(c2, Point2::new(0.0, 0.0))];
+    let dy_row = 0.5 * 3f64.sqrt() * h;
+    let mut count = 0;
+    let mut j = 1u32;
+    loop {
+        let py = f64::from(j) * dy_row;
+        if py >= c2.y - margin {
+            return count;
+        }
+        // The interval of px where both distances are ≥ margin.
+        let (mut u0, mut u1) = (f64::NEG_INFINITY, f64::INFINITY);
+        for &(ux, uy, p0) in &sides {
+            // ux·(py − p0.y) − uy·(px − p0.x) ≥ margin, i.e. k0 − uy·px ≥ 0.
+            let k0 = ux * (py - p0.y) + uy * p0.x - margin;
+            if uy > 0.0 {
+                u1 = u1.min(k0 / uy);
+            } else if uy < 0.0 {
+                u0 = u0.max(k0 / uy);
+            } else if k0 < 0.0 {
+                u1 = f64::NEG_INFINITY;
+            }
+        }
+        // Lattice columns: odd rows shifted by h/2, so neighbouring rows make equilateral
+        // triangles.
+        let shift = if j % 2 == 1 { 0.5 * h } else { 0.0 };
+        let i0 = ((u0 - shift) / h).ceil();
+        let mut px = shift + i0 * h;
+        while px <= u1 {
+            let p = frame.a + px * frame.x + py * frame.y;
+            if near(p) {
+                if count == limit {
+                    return count;
+                }
+                f(px, py, p);
+                count += 1;
+            }
+            px += h;
+        }
+        j += 1;
+    }
+}
+
 /// The triangulation of face `t`: its boundary (corners and the points of its divided
 /// edges, in its own order) and, when `h > 0`, a lattice of spacing `h` inside.
 fn face_mesh(
@@ -210,13 +315,9 @@ fn face_mesh(
     s: f64,
     near: &dyn Fn(DVec3) -> bool,
 ) -> Option<FaceMesh> {
-    let [a, b, c] = t.map(|i| pos0[i as usize]);
-    let x = (b - a).normalize();
-    let y = (b - a).cross(c - a).normalize().cross(x);
-    if !(x.is_finite() && y.is_finite()) {
-        return None;
-    }
-    let to2 = |p: DVec3| Point2::new((p - a).dot(x), (p - a).dot(y));
+    let frame = Frame::new(pos0, t)?;
+    let (a, b, c, x, y) = (frame.a, frame.b, frame.c, frame.x, frame.y);
+    let to2 = |p: DVec3| frame.to2(p);
     // Boundary, counter-clockwise in the face's frame.
     let ids = boundary(divided, t);
     let mut pts: Vec<Point2<f64>> = ids.iter().map(|&i| to2(pos[i as usize])).collect();
@@ -225,53 +326,10 @@ fn face_mesh(
     // between the other two sides less h/2.
     let mut lattice = Vec::new();
     if h > 0.0 {
-        let (c2, b2) = (to2(c), to2(b));
-        let margin = 0.5 * h;
-        // Distance from (px, py) to the lines a–c and b–c: linear in px along a row; the
-        // interior lies left of a→b, b→c and c→a.
-        let side = |p0: Point2<f64>, p1: Point2<f64>| {
-            let (dx, dy) = (p1.x - p0.x, p1.y - p0.y);
-            let l = (dx * dx + dy * dy).sqrt();
-            // Signed distance (positive inside) = (dx·(py − p0y) − dy·(px − p0x)) / l.
-            (dx / l, dy / l, p0)
-        };
-        let sides = [side(b2, c2), side(c2, Point2::new(0.0, 0.0))];
-        let dy_row = 0.5 * 3f64.sqrt() * h;
-        let mut j = 1;
-        loop {
-            let py = f64::from(j) * dy_row;
-            if py >= c2.y - margin {
-                break;
-            }
-            // The interval of px where both distances are ≥ margin.
-            let (mut u0, mut u1) = (f64::NEG_INFINITY, f64::INFINITY);
-            for &(ux, uy, p0) in &sides {
-                // ux·(py − p0.y) − uy·(px − p0.x) ≥ margin.
-                let k0 = ux * (py - p0.y) + uy * p0.x - margin;
-                // k0 − uy·px ≥ 0.
-                if uy > 0.0 {
-                    u1 = u1.min(k0 / uy);
-                } else if uy < 0.0 {
-                    u0 = u0.max(k0 / uy);
-                } else if k0 < 0.0 {
-                    u1 = f64::NEG_INFINITY;
-                }
-            }
-            // Lattice columns: odd rows shifted by h/2, so neighbouring rows make
-            // equilateral triangles.
-            let shift = if j % 2 == 1 { 0.5 * h } else { 0.0 };
-            let i0 = ((u0 - shift) / h).ceil();
-            let mut px = shift + i0 * h;
-            while px <= u1 {
-                let p = a + px * x + py * y;
-                if near(p) {
-                    pts.push(Point2::new(px, py));
-                    lattice.push(p);
-                }
-                px += h;
-            }
-            j += 1;
-        }
+        lattice_points(&frame, h, near, usize::MAX, |px, py, p| {
+            pts.push(Point2::new(px, py));
+            lattice.push(p);
+        });
     }
     let edges: Vec<[usize; 2]> = (0..nb).map(|i| [i, (i + 1) % nb]).collect();
     let n_in = pts.len();

@@ -466,3 +466,33 @@ proptest::proptest! {
         on_source(&r, &m);
     }
 }
+
+/// A face of a square metre at s = 0.05 mm would hold some 5e8 lattice points: the remesh
+/// counts them against the vertex cap before building any, so refining fails with a clear
+/// error (or coarsens) instead of exhausting memory.
+#[test]
+fn a_huge_face_meets_the_cap_before_any_memory_is_spent() {
+    let p = |x: f64, y: f64| DVec3::new(x, y, 0.0);
+    let m = mesh(vec![
+        Triangle::new(p(0.0, 0.0), p(1000.0, 0.0), p(1000.0, 1000.0)),
+        Triangle::new(p(0.0, 0.0), p(1000.0, 1000.0), p(0.0, 1000.0)),
+    ]);
+    let capped = RefineConfig {
+        max_vertices: Some(2_000_000),
+        ..cfg(0.05)
+    };
+    match refine::refine(&m, &capped) {
+        Err(RefineError::TooManyVertices { cap, .. }) => assert_eq!(cap, 2_000_000),
+        other => panic!("expected TooManyVertices, got {:?}", other.map(|r| r.len())),
+    }
+    let coarse = refine::refine(
+        &m,
+        &RefineConfig {
+            on_cap: CapPolicy::Coarsen,
+            ..capped
+        },
+    )
+    .unwrap();
+    assert!(coarse.len() <= 2_000_000 && coarse.max_edge_mm > 0.05 * 10.0);
+    edges_ok(&coarse, coarse.max_edge_mm);
+}
