@@ -572,6 +572,8 @@ fn vertex_normals(
     let mut out_n = Vec::with_capacity(pos.len());
     let mut out_tris = tris.to_vec();
     let mut local: Vec<(DVec3, u32)> = Vec::new();
+    // Each corner's angle, computed once per vertex (not once per pair of corners).
+    let mut angles: Vec<f64> = Vec::new();
     for v in 0..pos.len() {
         let cs = &corners[start[v] as usize..start[v + 1] as usize];
         if cs.is_empty() {
@@ -590,13 +592,15 @@ fn vertex_normals(
             continue;
         }
         local.clear();
+        angles.clear();
+        angles.extend(cs.iter().map(|&(g, j)| angle(g, j)));
         for &(f, k) in cs {
             let nf = face_n[f as usize];
             let mut sum = DVec3::ZERO;
-            for &(g, j) in cs {
+            for (&(g, _), &w) in cs.iter().zip(&angles) {
                 let ng = face_n[g as usize];
                 if ng.dot(nf) >= cos_crease {
-                    sum += angle(g, j) * ng;
+                    sum += w * ng;
                 }
             }
             let n = sum.try_normalize().unwrap_or(nf);
