@@ -33,6 +33,12 @@
 //! The imprint method follows one half of the tool (see [`crate::imprint`]). With
 //! [`SweepConfig::reverse`] the path is swept backwards and the *other* half is imprinted,
 //! as the paper suggests for back-gouge detection.
+//!
+//! [`MoveKind::Cut`]: cam_core::MoveKind::Cut
+//! [`MoveKind::Plunge`]: cam_core::MoveKind::Plunge
+//! [`MoveKind::Retract`]: cam_core::MoveKind::Retract
+//! [`MoveKind::Rapid`]: cam_core::MoveKind::Rapid
+//! [`Imprinter::curves`]: crate::imprint::Imprinter::curves
 
 use std::io::{self, Write};
 
