@@ -322,8 +322,7 @@ fn face_mesh(
     let ids = boundary(divided, t);
     let mut pts: Vec<Point2<f64>> = ids.iter().map(|&i| to2(pos[i as usize])).collect();
     let nb = pts.len();
-    // The lattice: rows parallel to the first edge (y = 0), √3/2·h apart, each centred
-    // between the other two sides less h/2.
+    // The lattice (see `lattice_points`), then any midpoints added below.
     let mut lattice = Vec::new();
     if h > 0.0 {
         lattice_points(&frame, h, near, usize::MAX, |px, py, p| {
