@@ -517,6 +517,13 @@ fn feed_moves(
         })
 }
 
+/// Whether every feed move of `toolpath` keeps its tool axis (every 3-axis program): the
+/// exact measurement then reads the moves' convex volumes directly, without the imprint
+/// surface.
+pub fn keeps_axes(toolpath: &Toolpath) -> bool {
+    feed_moves(toolpath, 0.0).all(|(_, a, b, _, _)| a.axis == b.axis)
+}
+
 /// Half-extents (mm) of a torus puck (major radius `a`, tube `r`) about the unit axis `k`,
 /// padded for rounding.
 fn puck_extent(a: f64, r: f64, k: DVec3, pad: f64) -> DVec3 {
@@ -945,9 +952,7 @@ fn measure_vectors(
     // Every feed move a translation (every 3-axis program): the swept volume is the union of
     // the moves' convex volumes (puck and column), each entered exactly, so the first entry
     // is found among them directly (see `direct_one`) and no crossing is located.
-    let direct = exact
-        && locator == Locator::Fast
-        && feed_moves(toolpath, puck.r).all(|(_, a, b, _, _)| a.axis == b.axis);
+    let direct = exact && locator == Locator::Fast && keeps_axes(toolpath);
     let bvhs: Vec<PatchBvh> = match locator {
         Locator::Fast if direct => Vec::new(),
         Locator::Fast => models

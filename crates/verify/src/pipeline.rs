@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 use std::time::Instant;
 
-use cam_core::{Cutter, DVec3, Mesh, MoveKind, Toolpath};
+use cam_core::{Cutter, DVec3, Mesh, Toolpath};
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError, TriangleBvh};
 use crate::material;
@@ -435,11 +435,8 @@ pub fn verify_with_progress(
     // The exact measurement of a program whose feed moves all keep their axis reads the
     // moves' volumes directly (`measure`): the forward imprint surface is then built only
     // when asked for, and holds the rotating moves (none) otherwise.
-    let rotating = toolpath
-        .moves
-        .windows(2)
-        .any(|w| w[1].kind != MoveKind::Rapid && w[0].pose.axis != w[1].pose.axis);
-    let imprint_used = cfg.surface == SurfaceModel::Linear || rotating || cfg.keep_swept;
+    let imprint_used =
+        cfg.surface == SurfaceModel::Linear || !measure::keeps_axes(toolpath) || cfg.keep_swept;
     let swept = SweepModel::new(
         toolpath,
         cutter,

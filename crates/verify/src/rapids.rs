@@ -94,49 +94,43 @@ pub fn check_rapids(
             None => groups.push((k, vec![i])),
         }
     }
-    groups.sort_by_key(|(k, _)| *k != DVec3::Z);
-    let tilted = groups
-        .iter()
-        .filter(|(k, _)| *k != DVec3::Z)
-        .map(|(_, v)| v.len())
-        .sum();
-    let checked: usize = groups.iter().map(|(_, v)| v.len()).sum();
-    if checked == 0 {
-        return RapidReport {
-            unchecked,
-            ..RapidReport::default()
-        };
-    }
-    let mut depths: Vec<(usize, f64, DVec3)> = groups
+    // Per group, each rapid's depth and deepest tip; `None` when the turned part could not
+    // be built (not expected: turning keeps lengths), and its rapids stay unchecked.
+    let measured: Vec<Option<Vec<(usize, f64, DVec3)>>> = groups
         .par_iter()
-        .flat_map_iter(|(k, idx)| {
+        .map(|(k, idx)| {
             let frame = AxisFrame::new(*k);
-            let dc = frame
-                .turn_mesh(part)
-                .map(|m| DropCutter::new(m.as_ref().unwrap_or(part), *cutter));
-            idx.iter()
-                .map(|&i| {
-                    let (a0, b0) = (start(i).tip, toolpath.moves[i].pose.tip);
-                    let Ok(dc) = &dc else {
-                        return (i, f64::NAN, a0);
-                    };
-                    let (a, b) = (frame.to(a0), frame.to(b0));
-                    if a.x == b.x && a.y == b.y {
-                        let (low, low0) = if a.z <= b.z { (a, a0) } else { (b, b0) };
-                        let depth = dc.drop(a.x, a.y).map_or(0.0, |z| (z - low.z).max(0.0));
-                        return (i, depth, low0);
-                    }
-                    let r = dc.chord_rise((a.x, a.y), (b.x, b.y), a.z, b.z, 0.0, f64::INFINITY);
-                    (i, r.rise_mm.max(0.0), a0.lerp(b0, r.at))
-                })
-                .collect::<Vec<_>>()
+            let turned = frame.turn_mesh(part).ok()?;
+            let dc = DropCutter::new(turned.as_ref().unwrap_or(part), *cutter);
+            let depth = |i: usize| {
+                let (a0, b0) = (start(i).tip, toolpath.moves[i].pose.tip);
+                let (a, b) = (frame.to(a0), frame.to(b0));
+                if a.x == b.x && a.y == b.y {
+                    let (low, low0) = if a.z <= b.z { (a, a0) } else { (b, b0) };
+                    let depth = dc.drop(a.x, a.y).map_or(0.0, |z| (z - low.z).max(0.0));
+                    return (i, depth, low0);
+                }
+                let r = dc.chord_rise((a.x, a.y), (b.x, b.y), a.z, b.z, 0.0, f64::INFINITY);
+                (i, r.rise_mm.max(0.0), a0.lerp(b0, r.at))
+            };
+            Some(idx.iter().map(|&i| depth(i)).collect())
         })
         .collect();
+    let (mut checked, mut tilted) = (0, 0);
+    let mut depths: Vec<(usize, f64, DVec3)> = Vec::new();
+    for ((k, idx), m) in groups.iter().zip(measured) {
+        match m {
+            Some(d) => {
+                checked += d.len();
+                if *k != DVec3::Z {
+                    tilted += d.len();
+                }
+                depths.extend(d);
+            }
+            None => unchecked += idx.len(),
+        }
+    }
     depths.sort_by_key(|d| d.0);
-    // A group whose turned part could not be built (not expected: turning keeps lengths)
-    // is left unchecked.
-    let lost = depths.iter().filter(|d| d.1.is_nan()).count();
-    depths.retain(|d| !d.1.is_nan());
     let max_depth_mm = depths.iter().map(|d| d.1).fold(0.0, f64::max);
     let collisions = depths
         .iter()
@@ -149,9 +143,9 @@ pub fn check_rapids(
         })
         .collect();
     RapidReport {
-        checked: checked - lost,
+        checked,
         tilted,
-        unchecked: unchecked + lost,
+        unchecked,
         max_depth_mm,
         collisions,
     }

@@ -312,8 +312,8 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
                 (0..welded_tris.len() as u32).collect(),
             ))
         };
-        let refined = start.and_then(|(pos0, tris0, src0)| {
-            split_edges(&pos0, &tris0, src0, s, cfg.max_vertices, cfg.region)
+        let refined = start.and_then(|(pos, tris, src)| {
+            split_edges(pos, tris, src, s, cfg.max_vertices, cfg.region)
         });
         match refined {
             Ok((pos, tris, src)) => {
@@ -389,16 +389,15 @@ fn longest_edge(pos: &[DVec3], t: &[u32; 3]) -> usize {
 /// (no slivers from repeated closure). Returns `Err(cap)` when the vertex count passes the cap.
 #[allow(clippy::type_complexity)]
 fn split_edges(
-    pos0: &[DVec3],
-    tris0: &[[u32; 3]],
-    src0: Vec<u32>,
+    mut pos: Vec<DVec3>,
+    mut tris: Vec<[u32; 3]>,
+    mut src: Vec<u32>,
     s: f64,
     cap: Option<usize>,
     region: Option<[f64; 6]>,
 ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>), usize> {
     let inside = |pos: &[DVec3], t: &[u32; 3]| meets_region(region, pos, t);
     let s2 = s * s;
-    let mut pos = pos0.to_vec();
     if let Some(c) = cap
         && pos.len() > c
     {
@@ -406,10 +405,8 @@ fn split_edges(
     }
     // A face whose longest edge is ≤ s is final: only edges longer than s are ever split.
     // Only the others (`active`) are revisited.
-    let mut done: Vec<[u32; 3]> = Vec::with_capacity(tris0.len());
-    let mut done_src: Vec<u32> = Vec::with_capacity(tris0.len());
-    let mut tris = tris0.to_vec();
-    let mut src = src0;
+    let mut done: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
+    let mut done_src: Vec<u32> = Vec::with_capacity(tris.len());
     // Faces outside the region with an edge longer than s: split only when a neighbour's
     // split reaches them (to stay conforming), else final once nothing is active.
     let mut dormant: Vec<([u32; 3], u32, usize)> = Vec::new();

@@ -261,6 +261,32 @@ fn deterministic() {
     assert_eq!(a, b);
 }
 
+/// Refining `m` under `capped` (whose cap it exceeds) fails with `TooManyVertices` naming
+/// the cap; with `CapPolicy::Coarsen` it succeeds. Returns the suggested edge length and the
+/// coarsened mesh.
+fn errs_then_coarsens(m: &Mesh, capped: RefineConfig) -> (f64, RefinedMesh) {
+    let suggested = match refine::refine(m, &capped) {
+        Err(RefineError::TooManyVertices {
+            cap,
+            suggested_max_edge_mm,
+            ..
+        }) => {
+            assert_eq!(Some(cap), capped.max_vertices);
+            suggested_max_edge_mm
+        }
+        other => panic!("expected TooManyVertices, got {:?}", other.map(|r| r.len())),
+    };
+    let coarse = refine::refine(
+        m,
+        &RefineConfig {
+            on_cap: CapPolicy::Coarsen,
+            ..capped
+        },
+    )
+    .unwrap();
+    (suggested, coarse)
+}
+
 #[test]
 fn vertex_cap_errors_or_coarsens() {
     let m = cube(10.0);
@@ -268,25 +294,8 @@ fn vertex_cap_errors_or_coarsens() {
         max_vertices: Some(2000),
         ..cfg(0.2)
     };
-    match refine::refine(&m, &capped) {
-        Err(RefineError::TooManyVertices {
-            cap,
-            suggested_max_edge_mm,
-            ..
-        }) => {
-            assert_eq!(cap, 2000);
-            assert!(suggested_max_edge_mm > 0.2);
-        }
-        other => panic!("expected TooManyVertices, got {other:?}"),
-    }
-    let coarse = refine::refine(
-        &m,
-        &RefineConfig {
-            on_cap: CapPolicy::Coarsen,
-            ..capped
-        },
-    )
-    .unwrap();
+    let (suggested, coarse) = errs_then_coarsens(&m, capped);
+    assert!(suggested > 0.2);
     assert!(coarse.max_edge_mm > 0.2);
     // A cap below the design's own 8 vertices fails even when coarsening.
     let tiny = RefineConfig {
@@ -481,18 +490,7 @@ fn a_huge_face_meets_the_cap_before_any_memory_is_spent() {
         max_vertices: Some(2_000_000),
         ..cfg(0.05)
     };
-    match refine::refine(&m, &capped) {
-        Err(RefineError::TooManyVertices { cap, .. }) => assert_eq!(cap, 2_000_000),
-        other => panic!("expected TooManyVertices, got {:?}", other.map(|r| r.len())),
-    }
-    let coarse = refine::refine(
-        &m,
-        &RefineConfig {
-            on_cap: CapPolicy::Coarsen,
-            ..capped
-        },
-    )
-    .unwrap();
+    let (_, coarse) = errs_then_coarsens(&m, capped);
     assert!(coarse.len() <= 2_000_000 && coarse.max_edge_mm > 0.05 * 10.0);
     edges_ok(&coarse, coarse.max_edge_mm);
 }
