@@ -29,9 +29,9 @@ pub(crate) struct Need {
     pub crease_scallop: f64,
     /// Drops spent measuring.
     pub drops: usize,
-    /// The model's inputs `(p, q, ρ_cl)` at every evaluation point: slope along the pass,
-    /// chord slope across to the next pass, vertical-section radius (mm).
-    pub evals: Vec<(f64, f64, f64)>,
+    /// The largest cusp (mm) the model predicts at the evaluation points for the interval
+    /// evaluated ([`sidestep::SideStepModel::predicted_scallop`]; 0 without points).
+    pub predicted: f64,
 }
 
 impl Profile {
@@ -131,7 +131,8 @@ pub(crate) fn needed(
             rho = f64::INFINITY;
         }
         let spacing = behind.map_or(dv, |(_, dvb)| dv.max(dvb));
-        let w = model.xy_interval(p, q, rho);
+        let at = model.at(p, q);
+        let w = at.interval(rho);
         // A concave circle the model cannot fit a step into even at the floor (steep across
         // the passes, where the section's chord is long) is measured too: the model's
         // scallop there is the cutter's whole radius, not what the passes leave.
@@ -143,7 +144,7 @@ pub(crate) fn needed(
             need.steep += 1;
         }
         need.interval = need.interval.min(w);
-        need.evals.push((p, q, rho));
+        need.predicted = need.predicted.max(at.scallop(rho, dv));
     }
     // Suspected creases: measure the dip.
     need.creases = creases.len();
@@ -170,7 +171,8 @@ pub(crate) fn needed(
         // (vertical heights scale by cos α there) taken normal to the chord.
         let (alpha, theta) = sidestep::section_angles(p, q);
         let w = dv / theta.cos();
-        let re = model.effective_radius(p, q);
+        let at = model.at(p, q);
+        let re = at.effective_radius();
         let cusp = if w < 2.0 * re {
             re - (re * re - w * w / 4.0).sqrt()
         } else {
@@ -179,7 +181,7 @@ pub(crate) fn needed(
         let scallop = cusp + dip * alpha.cos() * theta.cos();
         // The interval scaled for this point: linear in the measured scallop (the dip grows
         // about linearly with the interval at a crease), never above the straight model.
-        let straight = model.xy_interval(p, q, f64::INFINITY);
+        let straight = at.interval(f64::INFINITY);
         let w_need = if scallop > 0.0 {
             (dv * h / scallop).min(straight)
         } else {
@@ -189,7 +191,7 @@ pub(crate) fn needed(
             need.steep += 1;
         }
         need.interval = need.interval.min(w_need);
-        need.evals.push((p, q, f64::INFINITY));
+        need.predicted = need.predicted.max(at.scallop(f64::INFINITY, dv));
         need.crease_scallop = need.crease_scallop.max(scallop);
     }
     if !need.interval.is_finite() {

@@ -450,10 +450,7 @@ fn plan_range(ctx: &Ctx<'_>, v_lo: f64, v_hi: f64, report: &(dyn Fn(f64) + Sync)
             }
         }
         let predicted = need
-            .evals
-            .iter()
-            .map(|&(p, q, rho)| model.predicted_scallop(p, q, rho, dv))
-            .fold(0.0, f64::max)
+            .predicted
             .max(verified_scallop)
             .max(need.crease_scallop);
         passes.push(PassPlan {

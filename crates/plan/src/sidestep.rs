@@ -204,8 +204,12 @@ impl Silhouette {
     /// `γ` in `[−π/2, π/2]` (clamped; 0 is the lowest point). Where a flat bottom (α = 0) has
     /// that normal along a whole segment, its middle.
     pub fn point(&self, gamma: f64) -> (f64, f64) {
-        let g = gamma.clamp(-FRAC_PI_2, FRAC_PI_2);
-        let (s, c) = g.sin_cos();
+        let (s, c) = gamma.clamp(-FRAC_PI_2, FRAC_PI_2).sin_cos();
+        self.point_sc(s, c)
+    }
+
+    /// [`Silhouette::point`] from the normal angle's sine and cosine (`c ≥ 0`).
+    fn point_sc(&self, s: f64, c: f64) -> (f64, f64) {
         let (a, b) = (self.a, self.b);
         let d = (a * a * s * s + b * b * c * c).sqrt();
         let (ey, ez) = if d > 0.0 {
@@ -259,6 +263,12 @@ impl Silhouette {
     /// the section is vertical (the side lies on it). Closed form for a ball; otherwise
     /// Newton's method on the normal angle (safeguarded by bisection) to a relative 1e-15.
     pub fn reach(&self, theta: f64, h: f64) -> (f64, f64) {
+        self.reach_with(theta, h, true)
+    }
+
+    /// [`Silhouette::reach`]; `closed` takes a flat end mill's ellipse in closed form, else
+    /// Newton's method as for a bull (the reference the closed form is tested against).
+    fn reach_with(&self, theta: f64, h: f64, closed: bool) -> (f64, f64) {
         if h.is_nan() || h <= 0.0 {
             return (0.0, 0.0);
         }
@@ -293,6 +303,19 @@ impl Silhouette {
         let height = |p: (f64, f64)| (x0.0 - p.0) * sn - (x0.1 - p.1) * cs;
         let along = |p: (f64, f64)| (p.0 - x0.0) * cs + (p.1 - x0.1) * sn;
         let f = |g: f64| (height(self.point(g)) - h, self.radius(g) * (g - th).sin());
+        // A flat end mill on a slope (r = 0, b > 0): the outline is the lower half of the
+        // ellipse (a cos φ, b sin φ), and its height above the section line through the
+        // contact φ_c is R_s(1 − cos(φ − φ_c)) with R_s = sqrt(a² sin²θ + b² cos²θ), so the
+        // points at height h lie at φ_c ± 2 asin(sqrt(h / 2R_s)). Whether they lie on the
+        // arcs walked is decided below as for the other outlines.
+        let ellipse = closed && self.r == 0.0 && self.b > 0.0;
+        let rs = (self.a * self.a * sn * sn + self.b * self.b * cs * cs).sqrt();
+        let phi_c = (x0.1 / self.b).atan2(x0.0 / self.a);
+        let eps = 2.0 * (h / (2.0 * rs)).min(1.0).sqrt().asin();
+        let on_ellipse = |side: f64| {
+            let phi = phi_c + side * eps;
+            (self.a * phi.cos(), self.b * phi.sin())
+        };
         // First guess: the osculating circle at the contact.
         let turn = {
             let rc = self.radius(th);
@@ -304,7 +327,9 @@ impl Silhouette {
         };
         let side = self.point(FRAC_PI_2);
         let h_side = height(side);
-        let dp = if h_side >= h {
+        let dp = if h_side >= h && ellipse {
+            along(on_ellipse(1.0))
+        } else if h_side >= h {
             along(self.point(newton(th, FRAC_PI_2, th + turn, f)))
         } else if cs > 1e-12 {
             along(side) + (h - h_side) / cs * sn
@@ -316,6 +341,8 @@ impl Silhouette {
         let on_arc = |from: f64, guess: f64| -along(self.point(newton(from, g_end, guess, f)));
         let dm = if height(end) < h {
             -along(end)
+        } else if ellipse {
+            -along(on_ellipse(-1.0))
         } else if self.b == 0.0 && th > 0.0 {
             // α = 0: the flat bottom, a segment at normal angle 0 between the corner arcs.
             let z = self.zc - self.r;
@@ -392,32 +419,45 @@ impl SectionProfile {
 
     fn tabulate(sil: &Silhouette) -> Vec<f64> {
         let n = OUTLINE_NODES;
-        // Normal angles uniform in themselves and in the ellipse parameter t (both sorted):
-        // merged.
-        let by_g: Vec<f64> = (0..=n).map(|k| k as f64 / n as f64 * FRAC_PI_2).collect();
-        let by_t: Vec<f64> = by_g
+        // Normal angles uniform in themselves and in the ellipse parameter t (both sorted),
+        // merged; each as (sin γ, cos γ), which is all a point needs. The parameter t's
+        // point has its normal along (b sin t, a cos t) normalised, so no angle is formed,
+        // and the uniform angles' sines and cosines are shared by every table.
+        static UNIFORM: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
+        let by_g = UNIFORM.get_or_init(|| {
+            (0..=n)
+                .map(|k| (k as f64 / n as f64 * FRAC_PI_2).sin_cos())
+                .collect()
+        });
+        let by_t: Vec<(f64, f64)> = by_g
             .iter()
-            .map(|&t| (sil.b * t.sin()).atan2(sil.a * t.cos()))
+            .map(|&(st, ct)| {
+                let (y, x) = (sil.b * st, sil.a * ct);
+                let h = (x * x + y * y).sqrt();
+                (y / h, x / h)
+            })
             .collect();
-        let mut gs = Vec::with_capacity(2 * n + 2);
+        // γ₁ < γ₂ in [0, π/2] exactly when sin γ₁ cos γ₂ < cos γ₁ sin γ₂.
+        let below = |p: (f64, f64), q: (f64, f64)| p.0 * q.1 < p.1 * q.0;
+        let mut gs: Vec<(f64, f64)> = Vec::with_capacity(2 * n + 2);
         let (mut i, mut j) = (0, 0);
         while i <= n || j <= n {
-            let g = if j > n || (i <= n && by_g[i] <= by_t[j]) {
+            let g = if j > n || (i <= n && !below(by_t[j], by_g[i])) {
                 i += 1;
                 by_g[i - 1]
             } else {
                 j += 1;
                 by_t[j - 1]
             };
-            if gs.last().is_none_or(|&l| g > l) {
+            if gs.last().is_none_or(|&l| below(l, g)) {
                 gs.push(g);
             }
         }
         let z0 = sil.lowest();
         let pts: Vec<(f64, f64)> = gs
             .iter()
-            .map(|&g| {
-                let (y, z) = sil.point(g);
+            .map(|&(sg, cg)| {
+                let (y, z) = sil.point_sc(sg, cg);
                 (y, z - z0)
             })
             .collect();
@@ -563,17 +603,9 @@ impl SideStepModel {
     /// The smallest [`SideStepModel::xy_interval`] (mm) over several vertical-section radii
     /// `rhos` at the same gradient (the outline is walked once).
     pub fn xy_interval_min(&self, p: f64, q: f64, rhos: &[f64]) -> f64 {
-        let st = self.straight(p, q);
-        let cap = MAX_STEPOVER_FRACTION * self.cutter.diameter();
+        let at = self.at(p, q);
         rhos.iter()
-            .map(|&rho_cl| {
-                let (r, rho) = self.circle(&st, p, q, rho_cl);
-                // No step leaves a cusp of h: on a convex section that sharp the cusp stays
-                // below h at every step (the cutter rolls round the edge), so the cap
-                // applies; on a concave one no step is safe.
-                let none = if rho > 0.0 { cap } else { 0.0 };
-                ball_step(r, rho, self.h).map_or(none, |w| w.min(cap)) * st.theta.cos()
-            })
+            .map(|&rho_cl| at.interval(rho_cl))
             .fold(f64::INFINITY, f64::min)
     }
 
@@ -582,11 +614,18 @@ impl SideStepModel {
     /// [`SideStepModel::xy_interval`] (exactly h at its own interval below the cap; the
     /// circle's radius where the step does not fit it).
     pub fn predicted_scallop(&self, p: f64, q: f64, rho_cl: f64, dv: f64) -> f64 {
-        let st = self.straight(p, q);
-        let (r, rho) = self.circle(&st, p, q, rho_cl);
-        let c = st.theta.cos();
-        let w = if c > 1e-12 { dv / c } else { f64::INFINITY };
-        ball_scallop(r, rho, w).unwrap_or(r)
+        self.at(p, q).scallop(rho_cl, dv)
+    }
+
+    /// The model at gradient `(p, q)`, the outline walked once for several questions (the
+    /// same answers as the methods above).
+    pub(crate) fn at(&self, p: f64, q: f64) -> ModelAt<'_> {
+        ModelAt {
+            model: self,
+            st: self.straight(p, q),
+            p,
+            q,
+        }
     }
 
     /// Height (mm) of the cutter's outline seen along a motion of slope `p` along the passes
@@ -600,6 +639,41 @@ impl SideStepModel {
     /// ([`SectionProfile`]).
     pub fn section(&self, p: f64) -> SectionProfile {
         SectionProfile::new(self.silhouette(p))
+    }
+}
+
+/// [`SideStepModel`] at one gradient ([`SideStepModel::at`]).
+pub(crate) struct ModelAt<'m> {
+    model: &'m SideStepModel,
+    st: Straight,
+    p: f64,
+    q: f64,
+}
+
+impl ModelAt<'_> {
+    /// [`SideStepModel::xy_interval`] (mm) here for vertical-section radius `rho_cl` (mm).
+    pub(crate) fn interval(&self, rho_cl: f64) -> f64 {
+        let m = self.model;
+        let cap = MAX_STEPOVER_FRACTION * m.cutter.diameter();
+        let (r, rho) = m.circle(&self.st, self.p, self.q, rho_cl);
+        // No step leaves a cusp of h: on a convex section that sharp the cusp stays below h
+        // at every step (the cutter rolls round the edge), so the cap applies; on a concave
+        // one no step is safe.
+        let none = if rho > 0.0 { cap } else { 0.0 };
+        ball_step(r, rho, m.h).map_or(none, |w| w.min(cap)) * self.st.theta.cos()
+    }
+
+    /// [`SideStepModel::predicted_scallop`] (mm) here for passes `dv` mm apart.
+    pub(crate) fn scallop(&self, rho_cl: f64, dv: f64) -> f64 {
+        let (r, rho) = self.model.circle(&self.st, self.p, self.q, rho_cl);
+        let c = self.st.theta.cos();
+        let w = if c > 1e-12 { dv / c } else { f64::INFINITY };
+        ball_scallop(r, rho, w).unwrap_or(r)
+    }
+
+    /// [`SideStepModel::effective_radius`] (mm) here.
+    pub(crate) fn effective_radius(&self) -> f64 {
+        self.st.r_eff
     }
 }
 
@@ -752,6 +826,39 @@ mod tests {
         );
         let left = scallop_of(&m.silhouette(p), 0.0, w_level);
         assert!((left - 0.37).abs() < 0.01, "{left}");
+    }
+
+    /// A flat end mill's reach in closed form agrees with Newton's method on the same
+    /// outline, on both sides, where the walk ends on the arc and where it leaves it.
+    #[test]
+    fn flat_reach_in_closed_form_is_newtons() {
+        // Walks that end on the arc (where the closed form is used): downhill, uphill.
+        let mut on_arc = [0usize; 2];
+        for al_deg in [0.5f64, 5.0, 20.0, 45.0, 70.0, 89.0, 90.0] {
+            let sil = Silhouette::new(&flat(), al_deg.to_radians());
+            for th_deg in [0.0f64, 1.0, 10.0, 30.0, 60.0, 85.0, 89.9] {
+                let th = th_deg.to_radians();
+                let x0 = sil.point(th);
+                let height = |p: (f64, f64)| (x0.0 - p.0) * th.sin() - (x0.1 - p.1) * th.cos();
+                let (h_end, h_side) = (
+                    height(sil.point(th - FRAC_PI_2)),
+                    height(sil.point(FRAC_PI_2)),
+                );
+                for h in [1e-6, 1e-3, 0.01, 0.05, 0.3, 1.0, 2.5] {
+                    let (cm, cp) = sil.reach_with(th, h, true);
+                    let (nm, np) = sil.reach_with(th, h, false);
+                    // Measured: 5.4e-13 at most.
+                    let tol = 2e-12 * (1.0 + nm.max(np));
+                    assert!(
+                        (cm - nm).abs() <= tol && (cp - np).abs() <= tol,
+                        "α {al_deg}° θ {th_deg}° h {h}: ({cm}, {cp}) vs ({nm}, {np})"
+                    );
+                    on_arc[0] += usize::from(h_end >= h);
+                    on_arc[1] += usize::from(h_side >= h);
+                }
+            }
+        }
+        assert!(on_arc[0] > 100 && on_arc[1] > 100, "{on_arc:?}");
     }
 
     /// Cusp height left by two copies of `sil` `w` apart along a straight section of slope
