@@ -42,6 +42,8 @@ struct Row {
     gouge: f64,
     scallop: f64,
     scallop_at: (f64, f64),
+    /// Reachable nodes left more than h.
+    above_h: usize,
     unreachable: usize,
     nodes: usize,
 }
@@ -55,8 +57,9 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
     );
     println!(
         "| part | cutter | τ mm | h mm | passes | CL points | plan s | planner's bound mm | \
-         max gouge mm | max scallop mm (at) | unreachable nodes / nodes |\n\
-         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+         max gouge mm | max scallop mm (at) | reachable nodes left > h | unreachable nodes / \
+         nodes |\n\
+         | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
     );
     for path in parts {
         let mesh = load(path)?;
@@ -101,6 +104,7 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 gouge: 0.0,
                 scallop: 0.0,
                 scallop_at: (f64::NAN, f64::NAN),
+                above_h: 0,
                 unreachable: 0,
                 nodes: cmp.nodes.len(),
             };
@@ -131,6 +135,7 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                         continue;
                     }
                     let s = n.vertical_mm * n.normal_z;
+                    row.above_h += usize::from(s > h);
                     if s > row.scallop {
                         row.scallop = s;
                         row.scallop_at = (x, y);
@@ -138,7 +143,7 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 }
             }
             println!(
-                "| {} | {} | {} | {} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} ({:.2}, {:.2}) | {} / {} |",
+                "| {} | {} | {} | {} | {} | {} | {:.3} | {:.6} | {:.6} | {:.6} ({:.2}, {:.2}) | {} | {} / {} |",
                 row.part,
                 row.cutter,
                 row.tau,
@@ -151,6 +156,7 @@ pub fn plan_report(parts: &[PathBuf], cutters: &[String], res: f64) -> Result<()
                 row.scallop,
                 row.scallop_at.0,
                 row.scallop_at.1,
+                row.above_h,
                 row.unreachable,
                 row.nodes
             );
