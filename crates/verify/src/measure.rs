@@ -188,6 +188,14 @@ fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
 /// Vectors per tile of the direct search (see `measure_vectors`).
 const DIRECT_TILE: usize = 256;
 
+/// Vectors per group of a tile that share one gathering of the moves near them (see
+/// `measure_vectors`).
+const DIRECT_GROUP: usize = 16;
+
+/// The most moves (and, counted apart, columns) a group's vectors search in a list in place
+/// of the trees; beyond it the trees, which prune by each vector's own segment, are faster.
+const DIRECT_CANDIDATES: usize = 256;
+
 const SAFETY: f64 = 4.0;
 const MIN_FACING: f64 = 0.5;
 
@@ -746,6 +754,85 @@ impl Extras {
     }
 }
 
+impl Extras {
+    /// The items whose boxes meet the box `lo..=hi` (boundaries included), in ascending
+    /// order (the order [`Extras::visit`] meets them in), appended to `out`. With `round`
+    /// positive, only those whose centres' segment also lies within `round` of that box.
+    /// Stops, returning `false`, once `out` holds more than `limit` items.
+    fn gather(&self, lo: DVec3, hi: DVec3, round: f64, limit: usize, out: &mut Vec<u32>) -> bool {
+        if self.nodes.is_empty() {
+            return true;
+        }
+        let meets = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let (a, b, first, count) = self.nodes[stack[top] as usize];
+            if !meets(a, b) {
+                continue;
+            }
+            if count == 0 {
+                stack[top] = first + 1;
+                stack[top + 1] = first;
+                top += 2;
+                continue;
+            }
+            for ci in first..first + count {
+                let (bl, bh) = self.bounds[ci as usize];
+                if !meets(bl, bh) {
+                    continue;
+                }
+                if round > 0.0 {
+                    let (_, _, c0, c1) = self.items[ci as usize];
+                    let d = c1 - c0;
+                    let len = d.length();
+                    let axis = Line {
+                        o: c0,
+                        n: if len > 0.0 { d / len } else { DVec3::X },
+                        lo: 0.0,
+                        hi: len,
+                    };
+                    if crate::proximity::segment_box_distance2(&axis, lo, hi) > round * round {
+                        continue;
+                    }
+                }
+                out.push(ci);
+                if out.len() > limit {
+                    return false;
+                }
+            }
+        }
+        true
+    }
+
+    /// [`Extras::visit`] over the items `among` only (ascending, and holding every item
+    /// whose box the segment meets, as [`Extras::gather`] returns for a box holding the
+    /// segment): the same calls of `f`, in the same order.
+    fn visit_among(
+        &self,
+        among: &[u32],
+        line: &Line,
+        mut hi: f64,
+        mut f: impl FnMut(usize, f64) -> f64,
+    ) {
+        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        for &ci in among {
+            let ci = ci as usize;
+            let (model, _, c0, c1) = self.items[ci];
+            let (bl, bh) = self.bounds[ci];
+            if !segment_box(line.o, inv, bl, bh, line.lo, hi) {
+                continue;
+            }
+            let seg = Line { hi, ..*line };
+            if model < PUCK && crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none() {
+                continue;
+            }
+            hi = f(ci, hi);
+        }
+    }
+}
+
 /// Whether the segment `o + s·n`, `s ∈ [t0, t1]`, meets the box (boundary included).
 fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
     let (mut lo, mut hi) = (t0, t1);
@@ -988,41 +1075,55 @@ fn measure_vectors(
         Extras::from_items(Vec::new(), Vec::new(), 0.0)
     };
     let rr = puck.a + puck.r;
+    // Every move's volume lies within `rr` of its centres' segment: `round` allows for
+    // rounding (see `Extras::gather`).
+    let scale = volumes.items.iter().fold(0.0f64, |m, it| {
+        m.max(it.2.abs().max_element())
+            .max(it.3.abs().max_element())
+    });
+    let round = rr + 1e-9 * (1.0 + rr + scale);
     // Entries through a column's bottom are the puck's (found before, or by the imprint
     // surface): only sides and starts are searched. An entry less than `tie` below the best
     // found does not replace it, so boxes that reach the best only by their padding (half
     // that: the bottoms of the many moves over level ground where the best lies) are pruned
     // whole.
-    let column_entry =
-        |line: &Line, hi: f64, found: &mut Option<(Entry, u32)>, tests: &mut usize| {
-            let tie = 2e-9 * (1.0 + rr);
-            let hi = found.map_or(hi, |(e, _)| e.s) - tie;
-            columns.visit(line, hi, |ci, hi| {
-                let (_, mv, c0, c1) = columns.items[ci];
-                *tests += 1;
-                let (a, b) = (
-                    toolpath.moves[mv as usize - 1].pose,
-                    toolpath.moves[mv as usize].pose,
-                );
-                let seg = Line { hi, ..*line };
-                let e = if a.axis == b.axis {
-                    crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
-                } else {
-                    // The closed-form hull first: most lines pass clear of a rotating
-                    // move's columns, whose search costs some 90 poses.
-                    rf.geometry(mv)
-                        .filter(|g| g.column_hull_entry(&seg).is_some())
-                        .and_then(|g| g.column_entry(&seg, false))
-                };
-                match e {
-                    Some(e) => {
-                        take_least(e, mv, found);
-                        hi.min(e.s - tie)
-                    }
-                    None => hi,
+    let column_entry = |line: &Line,
+                        hi: f64,
+                        found: &mut Option<(Entry, u32)>,
+                        tests: &mut usize,
+                        among: Option<&[u32]>| {
+        let tie = 2e-9 * (1.0 + rr);
+        let hi = found.map_or(hi, |(e, _)| e.s) - tie;
+        let f = |ci: usize, hi: f64| {
+            let (_, mv, c0, c1) = columns.items[ci];
+            *tests += 1;
+            let (a, b) = (
+                toolpath.moves[mv as usize - 1].pose,
+                toolpath.moves[mv as usize].pose,
+            );
+            let seg = Line { hi, ..*line };
+            let e = if a.axis == b.axis {
+                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
+            } else {
+                // The closed-form hull first: most lines pass clear of a rotating
+                // move's columns, whose search costs some 90 poses.
+                rf.geometry(mv)
+                    .filter(|g| g.column_hull_entry(&seg).is_some())
+                    .and_then(|g| g.column_entry(&seg, false))
+            };
+            match e {
+                Some(e) => {
+                    take_least(e, mv, found);
+                    hi.min(e.s - tie)
                 }
-            });
+                None => hi,
+            }
         };
+        match among {
+            Some(among) => columns.visit_among(among, line, hi, f),
+            None => columns.visit(line, hi, f),
+        }
+    };
     // Both surface models: the imprint surface holds the cutter's corner only. The rest of
     // the cutter is searched directly, move by move: its column (the cutter above its
     // corner, which cuts a wall with its side and reaches deeper than the vectors do) is
@@ -1051,7 +1152,7 @@ fn measure_vectors(
             }
             hi
         });
-        column_entry(line, hi, &mut found, tests);
+        column_entry(line, hi, &mut found, tests, None);
         found
     };
     let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
@@ -1078,103 +1179,116 @@ fn measure_vectors(
         );
         Some((mv, a.tip + puck.r * a.axis, b.tip + puck.r * b.axis))
     };
-    let direct_one =
-        |v: &Vector, seed: Option<(u32, DVec3, DVec3)>, queue: &mut Vec<(f64, u32)>| -> PerVector {
-            let mut stats = [0usize; 5];
-            let line = Line {
-                o: v.o,
-                n: v.n,
-                lo: v.lo,
-                hi: v.hi,
+    // `among`: the items of `volumes` and of `columns` to search instead of the trees (a
+    // superset of those the vector's segment up to its seed's entry meets; see the tiles
+    // below), or `None`.
+    let direct_one = |v: &Vector,
+                      seed: Option<(u32, DVec3, DVec3)>,
+                      queue: &mut Vec<(f64, u32)>,
+                      among: Option<(&[u32], &[u32])>|
+     -> PerVector {
+        let mut stats = [0usize; 5];
+        let line = Line {
+            o: v.o,
+            n: v.n,
+            lo: v.lo,
+            hi: v.hi,
+        };
+        let mut found: Option<(Entry, u32)> = None;
+        // The move that cut the previous vector (a neighbour): its entry, if any, bounds the
+        // search from the start. It is met again in the tree and changes nothing there.
+        if let Some((mv, c0, c1)) = seed {
+            stats[1] += 1;
+            found = entry_of(&line, mv, c0, c1)
+                .filter(|e| facing_ok(e.normal.dot(v.n)))
+                .map(|e| (e, mv));
+        }
+        let mut try_move = |ci: usize, found: &mut Option<(Entry, u32)>| {
+            let (_, mv, c0, c1) = volumes.items[ci];
+            let seg = Line {
+                hi: found.map_or(v.hi, |(f, _)| f.s),
+                ..line
             };
-            let mut found: Option<(Entry, u32)> = None;
-            // The move that cut the previous vector (a neighbour): its entry, if any, bounds the
-            // search from the start. It is met again in the tree and changes nothing there.
-            if let Some((mv, c0, c1)) = seed {
-                stats[1] += 1;
-                found = entry_of(&line, mv, c0, c1)
-                    .filter(|e| facing_ok(e.normal.dot(v.n)))
-                    .map(|e| (e, mv));
+            stats[1] += 1;
+            if let Some(e) = entry_of(&seg, mv, c0, c1)
+                && facing_ok(e.normal.dot(v.n))
+            {
+                take_least(e, mv, found);
             }
-            let mut try_move = |ci: usize, found: &mut Option<(Entry, u32)>| {
+        };
+        let hi0 = found.map_or(v.hi, |(f, _)| f.s);
+        if puck.a > 0.0 && puck.r > 0.0 {
+            // A bull's entry costs a Newton search: the moves whose capsule of radius
+            // `a + r` (which holds the puck: its entry is a lower bound) the segment enters,
+            // in the order of those bounds, until a bound lies beyond the best entry.
+            queue.clear();
+            let f = |ci: usize, hi: f64| {
                 let (_, mv, c0, c1) = volumes.items[ci];
+                if !near_capsule(&line, hi, c0, c1, rr) {
+                    return hi;
+                }
+                let k = axis_of(mv);
+                // The puck also lies in the slab `r` either side of the centres along `k`.
+                let Some((s0, s1)) = slab_interval(&line, k, c0.dot(k), c1.dot(k), puck.r) else {
+                    return hi;
+                };
                 let seg = Line {
-                    hi: found.map_or(v.hi, |(f, _)| f.s),
+                    lo: line.lo.max(s0),
+                    hi: hi.min(s1),
                     ..line
                 };
-                stats[1] += 1;
-                if let Some(e) = entry_of(&seg, mv, c0, c1)
-                    && facing_ok(e.normal.dot(v.n))
-                {
-                    take_least(e, mv, found);
+                if seg.lo > seg.hi {
+                    return hi;
                 }
+                if let Some(b) = crate::exact::capsule_entry(&seg, c0, c1, rr) {
+                    queue.push((b.s, ci as u32));
+                }
+                hi
             };
-            let hi0 = found.map_or(v.hi, |(f, _)| f.s);
-            if puck.a > 0.0 && puck.r > 0.0 {
-                // A bull's entry costs a Newton search: the moves whose capsule of radius
-                // `a + r` (which holds the puck: its entry is a lower bound) the segment enters,
-                // in the order of those bounds, until a bound lies beyond the best entry.
-                queue.clear();
-                volumes.visit(&line, hi0, |ci, hi| {
-                    let (_, mv, c0, c1) = volumes.items[ci];
-                    if !near_capsule(&line, hi, c0, c1, rr) {
-                        return hi;
-                    }
-                    let k = axis_of(mv);
-                    // The puck also lies in the slab `r` either side of the centres along `k`.
-                    let Some((s0, s1)) = slab_interval(&line, k, c0.dot(k), c1.dot(k), puck.r)
-                    else {
-                        return hi;
-                    };
-                    let seg = Line {
-                        lo: line.lo.max(s0),
-                        hi: hi.min(s1),
-                        ..line
-                    };
-                    if seg.lo > seg.hi {
-                        return hi;
-                    }
-                    if let Some(b) = crate::exact::capsule_entry(&seg, c0, c1, rr) {
-                        queue.push((b.s, ci as u32));
-                    }
-                    hi
-                });
-                queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-                for &(bound, ci) in queue.iter() {
-                    if found.is_some_and(|(f, _)| bound > f.s) {
-                        break;
-                    }
-                    try_move(ci as usize, &mut found);
-                }
-            } else {
-                volumes.visit(&line, hi0, |ci, hi| {
-                    let (_, _, c0, c1) = volumes.items[ci];
-                    if near_capsule(&line, hi, c0, c1, rr) {
-                        try_move(ci, &mut found);
-                    }
-                    found.map_or(hi, |(f, _)| f.s.min(hi))
-                });
+            match among {
+                Some((vols, _)) => volumes.visit_among(vols, &line, hi0, f),
+                None => volumes.visit(&line, hi0, f),
             }
-            column_entry(&line, v.hi, &mut found, &mut stats[1]);
-            let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
-                let dev = Deviation {
-                    position: v.o,
-                    normal: v.n,
-                    signed_mm: None,
-                    source_move: None,
-                };
-                return (dev, 0.0, None, None, stats);
+            queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+            for &(bound, ci) in queue.iter() {
+                if found.is_some_and(|(f, _)| bound > f.s) {
+                    break;
+                }
+                try_move(ci as usize, &mut found);
+            }
+        } else {
+            let f = |ci: usize, hi: f64| {
+                let (_, _, c0, c1) = volumes.items[ci];
+                if near_capsule(&line, hi, c0, c1, rr) {
+                    try_move(ci, &mut found);
+                }
+                found.map_or(hi, |(f, _)| f.s.min(hi))
             };
-            stats[0] = 1;
-            stats[2] = 1;
+            match among {
+                Some((vols, _)) => volumes.visit_among(vols, &line, hi0, f),
+                None => volumes.visit(&line, hi0, f),
+            }
+        }
+        column_entry(&line, v.hi, &mut found, &mut stats[1], among.map(|a| a.1));
+        let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
             let dev = Deviation {
                 position: v.o,
                 normal: v.n,
-                signed_mm: Some(e.s),
-                source_move: Some(mv),
+                signed_mm: None,
+                source_move: None,
             };
-            (dev, e.normal.dot(v.n), None, Some(Source::Move(mv)), stats)
+            return (dev, 0.0, None, None, stats);
         };
+        stats[0] = 1;
+        stats[2] = 1;
+        let dev = Deviation {
+            position: v.o,
+            normal: v.n,
+            signed_mm: Some(e.s),
+            source_move: Some(mv),
+        };
+        (dev, e.normal.dot(v.n), None, Some(Source::Move(mv)), stats)
+    };
     let move_of = |c: &Crossing| {
         let (piece, _) = unkey(c.key);
         models[c.model as usize].pieces[piece].source_move()
@@ -1457,7 +1571,8 @@ fn measure_vectors(
     for chunk in vectors.chunks(MEASURE_CHUNK) {
         if direct {
             // In tiles of neighbouring vectors (Morton order of their origins), each seeded
-            // by the move that cut the one before; the answers do not depend on the seeds.
+            // by the move that cut one before it; the seeds only prune (the answers do not
+            // depend on them, but for the last bits of a bull's Newton solve).
             let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
             let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
             order.sort_unstable();
@@ -1465,15 +1580,67 @@ fn measure_vectors(
                 .par_chunks(DIRECT_TILE)
                 .flat_map_iter(|tile| {
                     let (mut seed, mut queue) = (None, Vec::new());
-                    tile.iter()
-                        .map(|&(_, i)| {
-                            let r = direct_one(&chunk[i as usize], seed, &mut queue);
+                    let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
+                    let mut out = Vec::with_capacity(tile.len());
+                    for group in tile.chunks(DIRECT_GROUP) {
+                        // A vector's entry into its seed's move bounds its search; a vector
+                        // its seed misses is searched in the trees, and seeds the next.
+                        pending.clear();
+                        for &(_, i) in group {
+                            let v = &chunk[i as usize];
+                            let line = Line {
+                                o: v.o,
+                                n: v.n,
+                                lo: v.lo,
+                                hi: v.hi,
+                            };
+                            let bound = seed.and_then(|(mv, c0, c1)| {
+                                entry_of(&line, mv, c0, c1)
+                                    .filter(|e| facing_ok(e.normal.dot(v.n)))
+                                    .map(|e| e.s)
+                            });
+                            match bound {
+                                Some(s) => pending.push((i, s, seed)),
+                                None => {
+                                    let r = direct_one(v, seed, &mut queue, None);
+                                    if let Some(mv) = r.0.source_move {
+                                        seed = seed_of(mv);
+                                    }
+                                    out.push((i, r));
+                                }
+                            }
+                        }
+                        if pending.is_empty() {
+                            continue;
+                        }
+                        // The rest search only the moves and columns that can reach the box
+                        // of their segments up to those bounds (padded for rounding),
+                        // gathered once for the group. Where that box holds too many (a
+                        // dense program), each vector searches the trees, which prune by its
+                        // own segment.
+                        let (mut lo, mut hi) =
+                            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                        for &(i, s, _) in &pending {
+                            let v = &chunk[i as usize];
+                            let (p, q) = (v.o + v.lo * v.n, v.o + s * v.n);
+                            (lo, hi) = (lo.min(p).min(q), hi.max(p).max(q));
+                        }
+                        let pad = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
+                        (lo, hi) = (lo - pad, hi + pad);
+                        vols.clear();
+                        cols.clear();
+                        let gathered = volumes.gather(lo, hi, round, DIRECT_CANDIDATES, &mut vols)
+                            && columns.gather(lo, hi, 0.0, DIRECT_CANDIDATES, &mut cols);
+                        for &(i, _, sd) in &pending {
+                            let among = gathered.then_some((&vols[..], &cols[..]));
+                            let r = direct_one(&chunk[i as usize], sd, &mut queue, among);
                             if let Some(mv) = r.0.source_move {
                                 seed = seed_of(mv);
                             }
-                            (i, r)
-                        })
-                        .collect::<Vec<_>>()
+                            out.push((i, r));
+                        }
+                    }
+                    out
                 })
                 .collect();
             done.sort_unstable_by_key(|&(i, _)| i);

@@ -629,3 +629,78 @@ fn a_dense_program_is_read_exactly() {
     );
     assert_eq!(m.deviations[0].source_move, Some(from as u32));
 }
+
+/// Many vectors in that dense program, read as a group and against the brute force: 169
+/// parallel lines about the same vertex, 0.25 mm apart across the normal, for a ball, a bull
+/// and a flat end mill. Neighbours enter the move that cut the one before, so they are read
+/// in groups: some groups' boxes reach few enough moves to search them as a list, the
+/// others search the trees. Every reading must equal the least entry over every move's puck
+/// and column.
+#[test]
+fn a_dense_program_is_read_exactly_in_groups() {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    use cam_verify::measure::first_entries;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/verify");
+    let tp = cam_gcode::read_gcode(
+        root.join("mount_rush_bull_dense.ngc"),
+        &cam_gcode::ReadConfig::default(),
+    )
+    .unwrap();
+    let o = DVec3::new(-25.489606857299805, -2.1983015537261963, 1.3206899166107178);
+    let n = DVec3::new(0.6608251943731915, -0.2218887422182684, 0.7169905498389979).normalize();
+    let u = n.any_orthonormal_vector();
+    let w = n.cross(u);
+    let mut lines = Vec::new();
+    for i in -6..=6 {
+        for j in -6..=6 {
+            let p = o + 0.25 * (i as f64 * u + j as f64 * w);
+            lines.push((p - 1.0 * n, n));
+        }
+    }
+    for spec in ["ball:6", "bull:6:1.5", "flat:6"] {
+        let cutter: Cutter = spec.parse().unwrap();
+        let model = SweepModel::new(&tp, &cutter, &SweepConfig::default());
+        let got = first_entries(&[&model], &tp, &lines, 4.0, SurfaceModel::Exact);
+        let moves: Vec<MoveGeometry> = tp
+            .moves
+            .windows(2)
+            .filter(|w| w[1].kind != MoveKind::Rapid)
+            .map(|w| MoveGeometry {
+                a: w[0].pose,
+                b: w[1].pose,
+                puck: Puck::of(&cutter),
+            })
+            .collect();
+        let mut read = 0;
+        for (&(o, n), got) in lines.iter().zip(&got) {
+            let line = Line {
+                o,
+                n,
+                lo: 0.0,
+                hi: 4.0,
+            };
+            let brute = moves
+                .iter()
+                .flat_map(|g| [g.translation_entry(&line), g.column_entry(&line, false)])
+                .flatten()
+                .filter(|e| e.normal.dot(n) < 0.0)
+                .map(|e| e.s)
+                .fold(f64::INFINITY, f64::min);
+            let got = got.unwrap_or(f64::INFINITY);
+            if brute.is_infinite() {
+                assert!(
+                    got.is_infinite(),
+                    "{spec}: {o:?}: read {got}, nothing there"
+                );
+                continue;
+            }
+            assert!(
+                (got - brute).abs() <= 1e-9,
+                "{spec}: {o:?}: read {got}, brute force {brute}"
+            );
+            read += 1;
+        }
+        println!("{spec}: {read} of {} lines read, all exact", lines.len());
+        assert!(read > 150, "{spec}: only {read} lines enter the cutter");
+    }
+}
