@@ -555,6 +555,16 @@ pub fn convex_translation_entry(
     k: DVec3,
 ) -> Option<Entry> {
     let d = c1 - c0;
+    // The distance to the swept puck is convex along the line: outside at `hi` and not
+    // rising there, the line is outside over the whole segment (it passes the puck beyond
+    // `hi`, or enters it later). One evaluation in place of the walk up from `lo`, for the
+    // many moves a search tries below a bound they cannot beat.
+    if line.hi.is_finite() && line.hi > line.lo {
+        let (dist, g, _) = segment_disk_min(puck, line.at(line.hi) - c0, d, k, 0.5);
+        if dist - puck.r > ROOT_TOL_MM && g.dot(line.n) <= 0.0 {
+            return None;
+        }
+    }
     // Along the line the minimiser moves little from one Newton iterate to the next.
     let mut guess = 0.5;
     let f = |s: f64| {

@@ -380,6 +380,72 @@ fn bull_translation_matches_instances_on_any_move() {
     assert!(worst < 0.05, "brute force off by {worst} mm");
 }
 
+/// A bull's translation entry searched only up to `hi` (as the measurement searches below
+/// the best entry found so far, where most moves are turned away after one evaluation):
+/// the same entry as over the whole line where that lies below `hi`, else none. Moves and
+/// lines as above, each cut at nine points along it and just either side of its entry.
+#[test]
+fn bull_translation_cut_short_is_the_entry_or_none() {
+    let mut rng = Lcg(0x5407_7c07);
+    let puck = Puck { a: 1.5, r: 1.5 };
+    let (mut kept, mut turned_away) = (0, 0);
+    for i in 0..3000 {
+        let k = if i % 3 == 0 { DVec3::Z } else { rng.unit() };
+        let c0 = DVec3::new(
+            rng.range(-2.0, 2.0),
+            rng.range(-2.0, 2.0),
+            rng.range(-1.0, 1.0),
+        );
+        let mut d = rng.unit() * rng.range(0.5, 4.0);
+        if i % 4 == 1 {
+            d -= d.dot(k) * k;
+        }
+        let c1 = c0 + d;
+        let target = c0 + rng.next() * d + rng.unit() * rng.range(0.0, 3.5);
+        let n = rng.unit();
+        let line = Line {
+            o: target - n * rng.range(2.0, 8.0),
+            n,
+            lo: -4.0,
+            hi: 12.0,
+        };
+        let full = convex_translation_entry(&line, &puck, c0, c1, k);
+        let mut cuts: Vec<f64> = (1..=9).map(|j| line.lo + 16.0 * j as f64 / 10.0).collect();
+        if let Some(e) = full {
+            cuts.extend([e.s - 1e-3, e.s + 1e-3]);
+        }
+        for hi in cuts.into_iter().filter(|&hi| hi >= line.lo) {
+            let short = convex_translation_entry(&Line { hi, ..line }, &puck, c0, c1, k);
+            match full {
+                Some(e) if e.s <= hi - 1e-9 => {
+                    let s = short.map(|x| x.s);
+                    assert!(
+                        s.is_some_and(|s| (s - e.s).abs() <= 1e-9),
+                        "case {i}: cut at {hi}, entry {} read as {s:?}",
+                        e.s
+                    );
+                    kept += 1;
+                }
+                Some(e) if e.s < hi + 1e-9 => {}
+                _ => {
+                    assert!(
+                        short.is_none(),
+                        "case {i}: cut at {hi}, entry {:?} read as {:?}",
+                        full.map(|e| e.s),
+                        short.map(|e| e.s)
+                    );
+                    turned_away += usize::from(full.is_some());
+                }
+            }
+        }
+    }
+    eprintln!("cut short: {kept} entries kept, {turned_away} later entries turned away");
+    assert!(
+        kept > 3000 && turned_away > 3000,
+        "{kept} kept, {turned_away} turned away"
+    );
+}
+
 /// Brute force: the least entry over many column instances along the move, and whether
 /// that instance is entered other than through its base or next to it (its side more than
 /// two instances' spacing above the base, or the line's start).
