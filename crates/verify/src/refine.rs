@@ -26,6 +26,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 use cam_core::{Cutter, DVec3, Mesh};
+use rayon::prelude::*;
 
 /// What [`refine`] does when the refined mesh would exceed [`RefineConfig::max_vertices`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -533,11 +534,12 @@ fn vertex_normals(
     crease_deg: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
     let cos_crease = crease_deg.to_radians().cos();
-    let design = mesh.triangles();
-    let face_n: Vec<DVec3> = src
-        .iter()
-        .map(|&s| design[s as usize].normal().unwrap_or(DVec3::Z))
+    let design_n: Vec<DVec3> = mesh
+        .triangles()
+        .par_iter()
+        .map(|t| t.normal().unwrap_or(DVec3::Z))
         .collect();
+    let face_n: Vec<DVec3> = src.par_iter().map(|&s| design_n[s as usize]).collect();
     // Incidence in CSR form: corners (face, k) per vertex, in face order.
     let mut start = vec![0u32; pos.len() + 1];
     for t in tris {
@@ -565,54 +567,83 @@ fn vertex_normals(
             pos[t[(k + 2) % 3] as usize],
         )
     };
+    // Per vertex, in parallel over blocks of vertices: its distinct normals in the order of
+    // its corners (`normals`, `count` per vertex) and each corner's index among them (`slot`,
+    // aligned with `corners`); then, in order, the output vertices and the triangles'
+    // corners. The same as one pass over the vertices in order.
+    const BLOCK: usize = 4096;
+    let mut slot = vec![0u32; corners.len()];
+    let mut slices = Vec::new();
+    let mut rest = slot.as_mut_slice();
+    for b in (0..pos.len()).step_by(BLOCK) {
+        let e = (b + BLOCK).min(pos.len());
+        let (head, tail) = rest.split_at_mut((start[e] - start[b]) as usize);
+        slices.push((b, e, head));
+        rest = tail;
+    }
+    let blocks: Vec<(Vec<DVec3>, Vec<u32>)> = slices
+        .into_par_iter()
+        .map(|(b, e, slot)| {
+            let (mut normals, mut count) = (Vec::new(), Vec::with_capacity(e - b));
+            // Each corner's angle, computed once per vertex (not once per pair of corners).
+            let mut angles: Vec<f64> = Vec::new();
+            let base = start[b] as usize;
+            for v in b..e {
+                let (c0, c1) = (start[v] as usize, start[v + 1] as usize);
+                let cs = &corners[c0..c1];
+                let slot = &mut slot[c0 - base..c1 - base];
+                let first = normals.len();
+                if cs.is_empty() {
+                    count.push(0);
+                    continue;
+                }
+                let n0 = face_n[cs[0].0 as usize];
+                if cs.iter().all(|&(f, _)| face_n[f as usize] == n0) {
+                    normals.push(n0);
+                    count.push(1);
+                    slot.fill(0);
+                    continue;
+                }
+                angles.clear();
+                angles.extend(cs.iter().map(|&(g, j)| angle(g, j)));
+                for (i, &(f, _)) in cs.iter().enumerate() {
+                    let nf = face_n[f as usize];
+                    let mut sum = DVec3::ZERO;
+                    for (&(g, _), &w) in cs.iter().zip(&angles) {
+                        let ng = face_n[g as usize];
+                        if ng.dot(nf) >= cos_crease {
+                            sum += w * ng;
+                        }
+                    }
+                    let n = sum.try_normalize().unwrap_or(nf);
+                    slot[i] = match normals[first..].iter().position(|&m| m == n) {
+                        Some(j) => j as u32,
+                        None => {
+                            normals.push(n);
+                            (normals.len() - 1 - first) as u32
+                        }
+                    };
+                }
+                count.push((normals.len() - first) as u32);
+            }
+            (normals, count)
+        })
+        .collect();
     let mut out_pos = Vec::with_capacity(pos.len());
     let mut out_n = Vec::with_capacity(pos.len());
     let mut out_tris = tris.to_vec();
-    let mut local: Vec<(DVec3, u32)> = Vec::new();
-    // Each corner's angle, computed once per vertex (not once per pair of corners).
-    let mut angles: Vec<f64> = Vec::new();
-    for v in 0..pos.len() {
-        let cs = &corners[start[v] as usize..start[v + 1] as usize];
-        if cs.is_empty() {
-            continue;
-        }
-        let all_same = cs
-            .iter()
-            .all(|&(f, _)| face_n[f as usize] == face_n[cs[0].0 as usize]);
-        if all_same {
+    for (bi, (normals, count)) in blocks.into_iter().enumerate() {
+        let b = bi * BLOCK;
+        for (i, &c) in count.iter().enumerate() {
+            let v = b + i;
             let idx = out_pos.len() as u32;
-            out_pos.push(pos[v]);
-            out_n.push(face_n[cs[0].0 as usize]);
-            for &(f, k) in cs {
-                out_tris[f as usize][k as usize] = idx;
+            out_pos.extend(std::iter::repeat_n(pos[v], c as usize));
+            for ci in start[v] as usize..start[v + 1] as usize {
+                let (f, k) = corners[ci];
+                out_tris[f as usize][k as usize] = idx + slot[ci];
             }
-            continue;
         }
-        local.clear();
-        angles.clear();
-        angles.extend(cs.iter().map(|&(g, j)| angle(g, j)));
-        for &(f, k) in cs {
-            let nf = face_n[f as usize];
-            let mut sum = DVec3::ZERO;
-            for (&(g, _), &w) in cs.iter().zip(&angles) {
-                let ng = face_n[g as usize];
-                if ng.dot(nf) >= cos_crease {
-                    sum += w * ng;
-                }
-            }
-            let n = sum.try_normalize().unwrap_or(nf);
-            let idx = match local.iter().find(|(m, _)| *m == n) {
-                Some(&(_, i)) => i,
-                None => {
-                    let i = out_pos.len() as u32;
-                    out_pos.push(pos[v]);
-                    out_n.push(n);
-                    local.push((n, i));
-                    i
-                }
-            };
-            out_tris[f as usize][k as usize] = idx;
-        }
+        out_n.extend(normals);
     }
     (out_pos, out_n, out_tris)
 }
