@@ -308,11 +308,12 @@ impl Silhouette {
         // contact φ_c is R_s(1 − cos(φ − φ_c)) with R_s = sqrt(a² sin²θ + b² cos²θ), so the
         // points at height h lie at φ_c ± 2 asin(sqrt(h / 2R_s)). Whether they lie on the
         // arcs walked is decided below as for the other outlines.
-        let ellipse = closed && self.r == 0.0 && self.b > 0.0;
-        let rs = (self.a * self.a * sn * sn + self.b * self.b * cs * cs).sqrt();
-        let phi_c = (x0.1 / self.b).atan2(x0.0 / self.a);
-        let eps = 2.0 * (h / (2.0 * rs)).min(1.0).sqrt().asin();
-        let on_ellipse = |side: f64| {
+        let ellipse = (closed && self.r == 0.0 && self.b > 0.0).then(|| {
+            let rs = (self.a * self.a * sn * sn + self.b * self.b * cs * cs).sqrt();
+            let phi_c = (x0.1 / self.b).atan2(x0.0 / self.a);
+            (phi_c, 2.0 * (h / (2.0 * rs)).min(1.0).sqrt().asin())
+        });
+        let on_ellipse = |(phi_c, eps): (f64, f64), side: f64| {
             let phi = phi_c + side * eps;
             (self.a * phi.cos(), self.b * phi.sin())
         };
@@ -327,8 +328,8 @@ impl Silhouette {
         };
         let side = self.point(FRAC_PI_2);
         let h_side = height(side);
-        let dp = if h_side >= h && ellipse {
-            along(on_ellipse(1.0))
+        let dp = if let Some(e) = ellipse.filter(|_| h_side >= h) {
+            along(on_ellipse(e, 1.0))
         } else if h_side >= h {
             along(self.point(newton(th, FRAC_PI_2, th + turn, f)))
         } else if cs > 1e-12 {
@@ -341,8 +342,8 @@ impl Silhouette {
         let on_arc = |from: f64, guess: f64| -along(self.point(newton(from, g_end, guess, f)));
         let dm = if height(end) < h {
             -along(end)
-        } else if ellipse {
-            -along(on_ellipse(-1.0))
+        } else if let Some(e) = ellipse {
+            -along(on_ellipse(e, -1.0))
         } else if self.b == 0.0 && th > 0.0 {
             // α = 0: the flat bottom, a segment at normal angle 0 between the corner arcs.
             let z = self.zc - self.r;

@@ -711,46 +711,63 @@ impl Extras {
         self.nodes[ni] = (l.0.min(rr.0), l.1.max(rr.1), left as u32, 0);
     }
 
-    /// Calls `f` for every item whose bound the segment `lo..hi(current)` of `line` meets;
-    /// `f` returns the new upper end of the segment.
-    fn visit(&self, line: &Line, mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
+    /// Depth first over the tree, left child first (so leaves in ascending item order):
+    /// `f(box min, box max, first, count)` for each node reached. For an inner node
+    /// (`count == 0`) its children are reached when `f` returns true; for a leaf (items
+    /// `first..first + count`, handled by `f`) the walk stops when `f` returns false.
+    fn walk(&self, mut f: impl FnMut(DVec3, DVec3, u32, u32) -> bool) {
         if self.nodes.is_empty() {
             return;
         }
-        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
         // The tree is balanced (median splits): its depth is below 64.
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let ni = stack[top];
-            let (a, b, first, count) = self.nodes[ni as usize];
-            if !segment_box(line.o, inv, a, b, line.lo, hi) {
-                continue;
-            }
-            if count == 0 {
+            let (a, b, first, count) = self.nodes[stack[top] as usize];
+            let go_on = f(a, b, first, count);
+            if count > 0 {
+                if !go_on {
+                    return;
+                }
+            } else if go_on {
                 stack[top] = first + 1;
                 stack[top + 1] = first;
                 top += 2;
-                continue;
-            }
-            for ci in first as usize..(first + count) as usize {
-                let (model, _, c0, c1) = self.items[ci];
-                let (bl, bh) = self.bounds[ci];
-                // Both bounds hold: the box (tight along a vertical axis), then the capsule
-                // (tight for a ball; a column has its box only, and a move's puck is
-                // tested as tightly by its visitor).
-                if count > 1 && !segment_box(line.o, inv, bl, bh, line.lo, hi) {
-                    continue;
-                }
-                let seg = Line { hi, ..*line };
-                if model < PUCK && crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none()
-                {
-                    continue;
-                }
-                hi = f(ci, hi);
             }
         }
+    }
+
+    /// Whether item `ci` may be entered by the segment `lo..hi` of `line` (`inv` the
+    /// reciprocal of its direction): its box (unless `boxed`, already tested), then its
+    /// capsule (tight for a ball; a column has its box only, and a move's puck is tested as
+    /// tightly by its visitor).
+    fn reaches(&self, ci: usize, line: &Line, inv: DVec3, hi: f64, boxed: bool) -> bool {
+        let (model, _, c0, c1) = self.items[ci];
+        let (bl, bh) = self.bounds[ci];
+        if !boxed && !segment_box(line.o, inv, bl, bh, line.lo, hi) {
+            return false;
+        }
+        model >= PUCK
+            || crate::exact::capsule_entry(&Line { hi, ..*line }, c0, c1, self.radius).is_some()
+    }
+
+    /// Calls `f` for every item whose bound the segment `lo..hi(current)` of `line` meets;
+    /// `f` returns the new upper end of the segment.
+    fn visit(&self, line: &Line, mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
+        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        self.walk(|a, b, first, count| {
+            if !segment_box(line.o, inv, a, b, line.lo, hi) {
+                return count > 0;
+            }
+            // A leaf of one item: its box is the node's.
+            for ci in first as usize..(first + count) as usize {
+                if self.reaches(ci, line, inv, hi, count == 1) {
+                    hi = f(ci, hi);
+                }
+            }
+            true
+        });
     }
 }
 
@@ -760,50 +777,37 @@ impl Extras {
     /// positive, only those whose centres' segment also lies within `round` of that box.
     /// Stops, returning `false`, once `out` holds more than `limit` items.
     fn gather(&self, lo: DVec3, hi: DVec3, round: f64, limit: usize, out: &mut Vec<u32>) -> bool {
-        if self.nodes.is_empty() {
-            return true;
-        }
         let meets = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let (a, b, first, count) = self.nodes[stack[top] as usize];
+        let near = |ci: u32| {
+            let (_, _, c0, c1) = self.items[ci as usize];
+            let d = c1 - c0;
+            let len = d.length();
+            let axis = Line {
+                o: c0,
+                n: if len > 0.0 { d / len } else { DVec3::X },
+                lo: 0.0,
+                hi: len,
+            };
+            crate::proximity::segment_box_distance2(&axis, lo, hi) <= round * round
+        };
+        let mut room = true;
+        self.walk(|a, b, first, count| {
             if !meets(a, b) {
-                continue;
-            }
-            if count == 0 {
-                stack[top] = first + 1;
-                stack[top + 1] = first;
-                top += 2;
-                continue;
+                return count > 0;
             }
             for ci in first..first + count {
                 let (bl, bh) = self.bounds[ci as usize];
-                if !meets(bl, bh) {
-                    continue;
-                }
-                if round > 0.0 {
-                    let (_, _, c0, c1) = self.items[ci as usize];
-                    let d = c1 - c0;
-                    let len = d.length();
-                    let axis = Line {
-                        o: c0,
-                        n: if len > 0.0 { d / len } else { DVec3::X },
-                        lo: 0.0,
-                        hi: len,
-                    };
-                    if crate::proximity::segment_box_distance2(&axis, lo, hi) > round * round {
-                        continue;
+                if meets(bl, bh) && (round <= 0.0 || near(ci)) {
+                    out.push(ci);
+                    if out.len() > limit {
+                        room = false;
+                        return false;
                     }
                 }
-                out.push(ci);
-                if out.len() > limit {
-                    return false;
-                }
             }
-        }
-        true
+            true
+        });
+        room
     }
 
     /// [`Extras::visit`] over the items `among` only (ascending, and holding every item
@@ -818,17 +822,9 @@ impl Extras {
     ) {
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
         for &ci in among {
-            let ci = ci as usize;
-            let (model, _, c0, c1) = self.items[ci];
-            let (bl, bh) = self.bounds[ci];
-            if !segment_box(line.o, inv, bl, bh, line.lo, hi) {
-                continue;
+            if self.reaches(ci as usize, line, inv, hi, false) {
+                hi = f(ci as usize, hi);
             }
-            let seg = Line { hi, ..*line };
-            if model < PUCK && crate::exact::capsule_entry(&seg, c0, c1, self.radius).is_none() {
-                continue;
-            }
-            hi = f(ci, hi);
         }
     }
 }
@@ -1182,8 +1178,23 @@ fn measure_vectors(
     // `among`: the items of `volumes` and of `columns` to search instead of the trees (a
     // superset of those the vector's segment up to its seed's entry meets; see the tiles
     // below), or `None`.
+    // The entry of `v` into the seed's move (a move that cut a neighbour), if it faces
+    // right: it bounds the search from the start. It is met again in the search and changes
+    // nothing there.
+    let seed_entry = |v: &Vector, (mv, c0, c1): (u32, DVec3, DVec3)| {
+        let line = Line {
+            o: v.o,
+            n: v.n,
+            lo: v.lo,
+            hi: v.hi,
+        };
+        entry_of(&line, mv, c0, c1)
+            .filter(|e| facing_ok(e.normal.dot(v.n)))
+            .map(|e| (e, mv))
+    };
+    // `seeded`: whether a seed was tried, and its entry (`seed_entry`).
     let direct_one = |v: &Vector,
-                      seed: Option<(u32, DVec3, DVec3)>,
+                      seeded: (bool, Option<(Entry, u32)>),
                       queue: &mut Vec<(f64, u32)>,
                       among: Option<(&[u32], &[u32])>|
      -> PerVector {
@@ -1194,15 +1205,8 @@ fn measure_vectors(
             lo: v.lo,
             hi: v.hi,
         };
-        let mut found: Option<(Entry, u32)> = None;
-        // The move that cut the previous vector (a neighbour): its entry, if any, bounds the
-        // search from the start. It is met again in the tree and changes nothing there.
-        if let Some((mv, c0, c1)) = seed {
-            stats[1] += 1;
-            found = entry_of(&line, mv, c0, c1)
-                .filter(|e| facing_ok(e.normal.dot(v.n)))
-                .map(|e| (e, mv));
-        }
+        let (tried, mut found) = seeded;
+        stats[1] += usize::from(tried);
         let mut try_move = |ci: usize, found: &mut Option<(Entry, u32)>| {
             let (_, mv, c0, c1) = volumes.items[ci];
             let seg = Line {
@@ -1588,21 +1592,11 @@ fn measure_vectors(
                         pending.clear();
                         for &(_, i) in group {
                             let v = &chunk[i as usize];
-                            let line = Line {
-                                o: v.o,
-                                n: v.n,
-                                lo: v.lo,
-                                hi: v.hi,
-                            };
-                            let bound = seed.and_then(|(mv, c0, c1)| {
-                                entry_of(&line, mv, c0, c1)
-                                    .filter(|e| facing_ok(e.normal.dot(v.n)))
-                                    .map(|e| e.s)
-                            });
+                            let bound = seed.and_then(|sd| seed_entry(v, sd));
                             match bound {
-                                Some(s) => pending.push((i, s, seed)),
+                                Some(b) => pending.push((i, b)),
                                 None => {
-                                    let r = direct_one(v, seed, &mut queue, None);
+                                    let r = direct_one(v, (seed.is_some(), None), &mut queue, None);
                                     if let Some(mv) = r.0.source_move {
                                         seed = seed_of(mv);
                                     }
@@ -1620,9 +1614,9 @@ fn measure_vectors(
                         // own segment.
                         let (mut lo, mut hi) =
                             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-                        for &(i, s, _) in &pending {
+                        for &(i, (e, _)) in &pending {
                             let v = &chunk[i as usize];
-                            let (p, q) = (v.o + v.lo * v.n, v.o + s * v.n);
+                            let (p, q) = (v.o + v.lo * v.n, v.o + e.s * v.n);
                             (lo, hi) = (lo.min(p).min(q), hi.max(p).max(q));
                         }
                         let pad = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
@@ -1631,9 +1625,10 @@ fn measure_vectors(
                         cols.clear();
                         let gathered = volumes.gather(lo, hi, round, DIRECT_CANDIDATES, &mut vols)
                             && columns.gather(lo, hi, 0.0, DIRECT_CANDIDATES, &mut cols);
-                        for &(i, _, sd) in &pending {
+                        for &(i, b) in &pending {
                             let among = gathered.then_some((&vols[..], &cols[..]));
-                            let r = direct_one(&chunk[i as usize], sd, &mut queue, among);
+                            let r =
+                                direct_one(&chunk[i as usize], (true, Some(b)), &mut queue, among);
                             if let Some(mv) = r.0.source_move {
                                 seed = seed_of(mv);
                             }

@@ -316,6 +316,37 @@ fn level_bull_translation_matches_instances() {
     assert!(hits > 300, "only {hits} hits");
 }
 
+/// Case `i` of the random bull translations: axis `k` (+Z every third case), the centres
+/// `c0`, `c1` (climbing; every fourth case from the second long and nearly level, where the
+/// minimiser sits just outside the rim's cylinder; from the third along the axis), and a
+/// line aimed within 3.5 mm of the move, searched over `[-4, 12]`.
+fn bull_case(rng: &mut Lcg, i: i32) -> (DVec3, DVec3, DVec3, Line) {
+    let k = if i % 3 == 0 { DVec3::Z } else { rng.unit() };
+    let c0 = DVec3::new(
+        rng.range(-2.0, 2.0),
+        rng.range(-2.0, 2.0),
+        rng.range(-1.0, 1.0),
+    );
+    let mut d = rng.unit() * rng.range(0.5, 4.0);
+    match i % 4 {
+        1 => {
+            d -= d.dot(k) * k;
+            d = d.normalize() * rng.range(10.0, 40.0) + k * rng.range(-3e-4, 3e-4);
+        }
+        2 => d = d.dot(k) * k,
+        _ => {}
+    }
+    let target = c0 + rng.next() * d + rng.unit() * rng.range(0.0, 3.5);
+    let n = rng.unit();
+    let line = Line {
+        o: target - n * rng.range(2.0, 8.0),
+        n,
+        lo: -4.0,
+        hi: 12.0,
+    };
+    (k, c0, c0 + d, line)
+}
+
 /// A bull's translation entry on any move (climbing, nearly level and long, along the axis,
 /// tilted axes) against a brute force over tool instances: the inner minimum over the move
 /// is found by Newton's method in one smooth piece of the distance, and the pieces meet
@@ -326,31 +357,8 @@ fn bull_translation_matches_instances_on_any_move() {
     let puck = Puck { a: 1.5, r: 1.5 };
     let (mut hits, mut worst) = (0, 0.0f64);
     for i in 0..3000 {
-        let k = if i % 3 == 0 { DVec3::Z } else { rng.unit() };
-        let c0 = DVec3::new(
-            rng.range(-2.0, 2.0),
-            rng.range(-2.0, 2.0),
-            rng.range(-1.0, 1.0),
-        );
-        let mut d = rng.unit() * rng.range(0.5, 4.0);
-        match i % 4 {
-            // Long and nearly level: the minimiser sits just outside the rim's cylinder.
-            1 => {
-                d -= d.dot(k) * k;
-                d = d.normalize() * rng.range(10.0, 40.0) + k * rng.range(-3e-4, 3e-4);
-            }
-            2 => d = d.dot(k) * k,
-            _ => {}
-        }
-        let c1 = c0 + d;
-        let target = c0 + rng.next() * d + rng.unit() * rng.range(0.0, 3.5);
-        let n = rng.unit();
-        let line = Line {
-            o: target - n * rng.range(2.0, 8.0),
-            n,
-            lo: -4.0,
-            hi: 12.0,
-        };
+        let (k, c0, c1, line) = bull_case(&mut rng, i);
+        let (d, n) = (c1 - c0, line.n);
         let e = convex_translation_entry(&line, &puck, c0, c1, k);
         // Instances no further apart than 0.004 mm along the move.
         let m = ((d.length() / 0.004).ceil() as usize).max(1000);
@@ -383,32 +391,15 @@ fn bull_translation_matches_instances_on_any_move() {
 /// A bull's translation entry searched only up to `hi` (as the measurement searches below
 /// the best entry found so far, where most moves are turned away after one evaluation):
 /// the same entry as over the whole line where that lies below `hi`, else none. Moves and
-/// lines as above, each cut at nine points along it and just either side of its entry.
+/// lines as `bull_case`, each cut at nine points along it and just either side of its
+/// entry.
 #[test]
 fn bull_translation_cut_short_is_the_entry_or_none() {
     let mut rng = Lcg(0x5407_7c07);
     let puck = Puck { a: 1.5, r: 1.5 };
     let (mut kept, mut turned_away) = (0, 0);
     for i in 0..3000 {
-        let k = if i % 3 == 0 { DVec3::Z } else { rng.unit() };
-        let c0 = DVec3::new(
-            rng.range(-2.0, 2.0),
-            rng.range(-2.0, 2.0),
-            rng.range(-1.0, 1.0),
-        );
-        let mut d = rng.unit() * rng.range(0.5, 4.0);
-        if i % 4 == 1 {
-            d -= d.dot(k) * k;
-        }
-        let c1 = c0 + d;
-        let target = c0 + rng.next() * d + rng.unit() * rng.range(0.0, 3.5);
-        let n = rng.unit();
-        let line = Line {
-            o: target - n * rng.range(2.0, 8.0),
-            n,
-            lo: -4.0,
-            hi: 12.0,
-        };
+        let (k, c0, c1, line) = bull_case(&mut rng, i);
         let full = convex_translation_entry(&line, &puck, c0, c1, k);
         let mut cuts: Vec<f64> = (1..=9).map(|j| line.lo + 16.0 * j as f64 / 10.0).collect();
         if let Some(e) = full {

@@ -431,6 +431,68 @@ fn dome_program_with_plunges() -> Toolpath {
     Toolpath { moves }
 }
 
+/// Checks the first entries [`cam_verify::measure::first_entries`] reads along `lines`
+/// (origin and unit direction, searched over 0..4 mm) for the cutter `spec` on `tp` against
+/// the brute force: the least entry, facing against the line, into the puck or the column
+/// (`base` as in `MoveGeometry::column_entry`) of every feed move, one by one. Returns the
+/// brute-force entries (`∞` where the line enters nothing).
+fn entries_equal_brute_force(
+    tp: &Toolpath,
+    spec: &str,
+    lines: &[(DVec3, DVec3)],
+    base: bool,
+) -> Vec<f64> {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    let cutter: Cutter = spec.parse().unwrap();
+    let model = SweepModel::new(tp, &cutter, &SweepConfig::default());
+    let got = cam_verify::measure::first_entries(&[&model], tp, lines, 4.0, SurfaceModel::Exact);
+    let puck = Puck::of(&cutter);
+    let moves: Vec<MoveGeometry> = tp
+        .moves
+        .windows(2)
+        .filter(|w| w[1].kind != MoveKind::Rapid)
+        .map(|w| MoveGeometry {
+            a: w[0].pose,
+            b: w[1].pose,
+            puck,
+        })
+        .collect();
+    let mut out = Vec::with_capacity(lines.len());
+    for (&(o, n), got) in lines.iter().zip(&got) {
+        let line = Line {
+            o,
+            n,
+            lo: 0.0,
+            hi: 4.0,
+        };
+        let least = |f: &dyn Fn(&MoveGeometry) -> Option<cam_verify::exact::Entry>| {
+            moves
+                .iter()
+                .filter_map(f)
+                .filter(|e| e.normal.dot(n) < 0.0)
+                .map(|e| e.s)
+                .fold(f64::INFINITY, f64::min)
+        };
+        let pucks = least(&|g| g.translation_entry(&line));
+        let columns = least(&|g| g.column_entry(&line, base));
+        let brute = pucks.min(columns);
+        let got = got.unwrap_or(f64::INFINITY);
+        if brute.is_infinite() {
+            assert!(
+                got.is_infinite(),
+                "{spec}: {o:?}: read {got}, nothing there"
+            );
+        } else {
+            assert!(
+                (got - brute).abs() <= 1e-9,
+                "{spec}: {o:?}: read {got}, brute force {brute} (pucks {pucks}, columns {columns})"
+            );
+        }
+        out.push(brute);
+    }
+    out
+}
+
 /// The exact measurement against brute force: the first entry of each line into the whole
 /// cutter swept along every feed move of the program, its puck and its column (the cutter
 /// above its corner) tested one by one. Along the dome's normals, from 1 mm inside to 3 mm
@@ -439,8 +501,6 @@ fn dome_program_with_plunges() -> Toolpath {
 /// part of the tool is its side above the corner included.
 #[test]
 fn exact_entries_equal_brute_force_over_every_move() {
-    use cam_verify::exact::{Line, MoveGeometry, Puck};
-    use cam_verify::measure::first_entries;
     let tp = dome_program_with_plunges();
     // Normals of the hemisphere (radius 20 about the origin) and of the plate around it.
     let mut lines = Vec::new();
@@ -461,54 +521,9 @@ fn exact_entries_equal_brute_force_over_every_move() {
         }
     }
     for spec in ["ball:6", "bull:6:1.5", "flat:6"] {
-        let cutter: Cutter = spec.parse().unwrap();
-        let model = SweepModel::new(&tp, &cutter, &SweepConfig::default());
-        let got = first_entries(&[&model], &tp, &lines, 4.0, SurfaceModel::Exact);
-        let puck = Puck::of(&cutter);
-        let moves: Vec<MoveGeometry> = tp
-            .moves
-            .windows(2)
-            .filter(|w| w[1].kind != MoveKind::Rapid)
-            .map(|w| MoveGeometry {
-                a: w[0].pose,
-                b: w[1].pose,
-                puck,
-            })
-            .collect();
-        let (mut gouges, mut starts) = (0, 0);
-        for (&(o, n), got) in lines.iter().zip(&got) {
-            let line = Line {
-                o,
-                n,
-                lo: 0.0,
-                hi: 4.0,
-            };
-            let least = |f: &dyn Fn(&MoveGeometry) -> Option<cam_verify::exact::Entry>| {
-                moves
-                    .iter()
-                    .filter_map(f)
-                    .filter(|e| e.normal.dot(n) < 0.0)
-                    .map(|e| e.s)
-                    .fold(f64::INFINITY, f64::min)
-            };
-            let pucks = least(&|g| g.translation_entry(&line));
-            let columns = least(&|g| g.column_entry(&line, true));
-            let brute = pucks.min(columns);
-            let got = got.unwrap_or(f64::INFINITY);
-            if brute.is_infinite() {
-                assert!(
-                    got.is_infinite(),
-                    "{spec}: {o:?}: read {got}, nothing there"
-                );
-                continue;
-            }
-            assert!(
-                (got - brute).abs() <= 1e-9,
-                "{spec}: {o:?}: read {got}, brute force {brute} (pucks {pucks}, columns {columns})"
-            );
-            gouges += usize::from(brute < 1.0);
-            starts += usize::from(brute == 0.0);
-        }
+        let brute = entries_equal_brute_force(&tp, spec, &lines, true);
+        let gouges = brute.iter().filter(|&&b| b < 1.0).count();
+        let starts = brute.iter().filter(|&&b| b == 0.0).count();
         println!(
             "{spec}: {} lines, all exact: {gouges} gouges ({starts} starting inside the \
              cutter)",
@@ -638,8 +653,6 @@ fn a_dense_program_is_read_exactly() {
 /// and column.
 #[test]
 fn a_dense_program_is_read_exactly_in_groups() {
-    use cam_verify::exact::{Line, MoveGeometry, Puck};
-    use cam_verify::measure::first_entries;
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/verify");
     let tp = cam_gcode::read_gcode(
         root.join("mount_rush_bull_dense.ngc"),
@@ -658,48 +671,8 @@ fn a_dense_program_is_read_exactly_in_groups() {
         }
     }
     for spec in ["ball:6", "bull:6:1.5", "flat:6"] {
-        let cutter: Cutter = spec.parse().unwrap();
-        let model = SweepModel::new(&tp, &cutter, &SweepConfig::default());
-        let got = first_entries(&[&model], &tp, &lines, 4.0, SurfaceModel::Exact);
-        let moves: Vec<MoveGeometry> = tp
-            .moves
-            .windows(2)
-            .filter(|w| w[1].kind != MoveKind::Rapid)
-            .map(|w| MoveGeometry {
-                a: w[0].pose,
-                b: w[1].pose,
-                puck: Puck::of(&cutter),
-            })
-            .collect();
-        let mut read = 0;
-        for (&(o, n), got) in lines.iter().zip(&got) {
-            let line = Line {
-                o,
-                n,
-                lo: 0.0,
-                hi: 4.0,
-            };
-            let brute = moves
-                .iter()
-                .flat_map(|g| [g.translation_entry(&line), g.column_entry(&line, false)])
-                .flatten()
-                .filter(|e| e.normal.dot(n) < 0.0)
-                .map(|e| e.s)
-                .fold(f64::INFINITY, f64::min);
-            let got = got.unwrap_or(f64::INFINITY);
-            if brute.is_infinite() {
-                assert!(
-                    got.is_infinite(),
-                    "{spec}: {o:?}: read {got}, nothing there"
-                );
-                continue;
-            }
-            assert!(
-                (got - brute).abs() <= 1e-9,
-                "{spec}: {o:?}: read {got}, brute force {brute}"
-            );
-            read += 1;
-        }
+        let brute = entries_equal_brute_force(&tp, spec, &lines, false);
+        let read = brute.iter().filter(|b| b.is_finite()).count();
         println!("{spec}: {read} of {} lines read, all exact", lines.len());
         assert!(read > 150, "{spec}: only {read} lines enter the cutter");
     }
