@@ -204,6 +204,13 @@ pub(crate) fn edge(pf: &Profile, x: f64, y: f64, p1: DVec3, p2: DVec3, best: f64
 /// of `z(t) − h(ρ(t))` reads `g(φ) = tan φ · t/ρ − |m| = 0`, `t = sqrt(ρ² − d²)`; `g` is
 /// increasing on `[φ_lo, π/2)`, negative at `φ_lo` and unbounded above, so a Newton
 /// iteration safeguarded by bisection converges to the unique root (steps of 1e-15 rad).
+///
+/// The angle is carried as its unit vector `(sin φ, cos φ)`, never as a number of radians:
+/// a Newton step `δ` turns it by `atan δ` (the vector `(1, δ)` normalised, which agrees with
+/// `δ` to third order, so the convergence stays quadratic), bisection takes the normalised
+/// sum of the bracket's vectors, and order along the arc is the sign of a cross product.
+/// No trigonometric function is evaluated (they were a fifth of a bull cutter's plan), and
+/// both `sin φ` and `cos φ` keep full relative precision at either end of the quarter.
 #[inline]
 fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
     let (a, r) = (pf.a, pf.r);
@@ -212,12 +219,25 @@ fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
         let h = pf.height(d.min(pf.big_r));
         return (0.0, h);
     }
-    let s_lo = ((d - a) / r).max(0.0);
-    // φ_lo: where ρ reaches max(a, d); and tan φ ≥ |m| at the root because t/ρ ≤ 1.
-    let mut lo = s_lo.min(1.0).asin().max(am.atan());
-    let mut hi = std::f64::consts::FRAC_PI_2;
-    let g = |phi: f64| -> (f64, f64, f64) {
-        let (sn, cs) = phi.sin_cos();
+    // Unit vectors (sin φ, cos φ) of the quarter [0, π/2].
+    let unit = |sn: f64, cs: f64| {
+        let n = (sn * sn + cs * cs).sqrt();
+        (sn / n, cs / n)
+    };
+    // φ1 < φ2 on the quarter.
+    let before = |p: (f64, f64), q: (f64, f64)| p.1 * q.0 - p.0 * q.1 > 0.0;
+    // φ_lo: where ρ reaches max(a, d) (sin φ = (d − a)/r), and atan |m| (tan φ ≥ |m| at the
+    // root because t/ρ ≤ 1): the later of the two.
+    let s_lo = ((d - a) / r).clamp(0.0, 1.0);
+    let by_reach = (s_lo, ((1.0 - s_lo) * (1.0 + s_lo)).sqrt());
+    let by_slope = unit(am, 1.0);
+    let mut lo = if before(by_reach, by_slope) {
+        by_slope
+    } else {
+        by_reach
+    };
+    let mut hi = (1.0, 0.0);
+    let g = |(sn, cs): (f64, f64)| -> (f64, f64, f64) {
         let rho = a + r * sn;
         let t = (rho * rho - d * d).max(0.0).sqrt();
         let tan = sn / cs;
@@ -231,15 +251,15 @@ fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
             };
         (val, dv, t / rho)
     };
+    let inside = |p: (f64, f64), lo: (f64, f64), hi: (f64, f64)| {
+        p.0.is_finite() && p.1.is_finite() && before(lo, p) && before(p, hi)
+    };
     // Start from one fixed-point step φ = atan(|m| ρ / t) taken at the lower bracket.
     let (_, _, q) = g(lo);
-    let mut phi = if q > 0.0 {
-        (am / q).atan()
-    } else {
-        0.5 * (lo + hi)
-    };
-    if !(phi > lo && phi < hi) {
-        phi = 0.5 * (lo + hi);
+    let mid = |lo: (f64, f64), hi: (f64, f64)| unit(lo.0 + hi.0, lo.1 + hi.1);
+    let mut phi = if q > 0.0 { unit(am, q) } else { mid(lo, hi) };
+    if !inside(phi, lo, hi) {
+        phi = mid(lo, hi);
     }
     for _ in 0..100 {
         let (v, dv, _) = g(phi);
@@ -248,26 +268,103 @@ fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
         } else {
             lo = phi;
         }
-        let newton = phi - v / dv;
+        let step = -v / dv;
+        // Turn φ by atan(step).
+        let newton = unit(phi.0 + step * phi.1, phi.1 - step * phi.0);
         // Converged: the step is below the tolerance (it may land on the bracket's end
         // just set to φ, which must not send the search back to bisecting).
-        if newton.is_finite() && (newton - phi).abs() <= 1e-15 {
-            phi = newton.clamp(lo, hi);
+        if step.is_finite() && step.abs() <= 1e-15 {
+            phi = if before(newton, lo) {
+                lo
+            } else if before(hi, newton) {
+                hi
+            } else {
+                newton
+            };
             break;
         }
-        let next = if newton.is_finite() && newton > lo && newton < hi {
+        let next = if step.is_finite() && inside(newton, lo, hi) {
             newton
         } else {
-            0.5 * (lo + hi)
+            mid(lo, hi)
         };
-        let done = (next - phi).abs() <= 1e-15 || hi - lo <= 1e-15;
+        // Bracket and step below 1e-15 rad: the cross product of the ends is the sine of
+        // the angle between them.
+        let turn = (phi.1 * next.0 - phi.0 * next.1).abs();
+        let width = hi.0 * lo.1 - hi.1 * lo.0;
         phi = next;
-        if done {
+        if turn <= 1e-15 || width <= 1e-15 {
             break;
         }
     }
-    let rho = a + r * phi.sin();
+    let (sn, cs) = phi;
+    let rho = a + r * sn;
     let t = (rho * rho - d * d).max(0.0).sqrt();
-    let half = (0.5 * phi).sin();
-    (t * m.signum(), 2.0 * r * half * half)
+    // r·(1 − cos φ) without cancellation near φ = 0.
+    (t * m.signum(), r * sn * sn / (1.0 + cs))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Profile, torus_edge};
+    use proptest::prelude::*;
+
+    /// The cutter's highest tip along the line `z = m·s` at XY distance `d` from its axis,
+    /// `max_s m·s − h(sqrt(d² + s²))`, by golden-section search: the objective is concave
+    /// (`h` convex and increasing, `ρ` convex in `s`), so the bracket keeps the maximum.
+    fn brute(pf: &Profile, d: f64, m: f64) -> f64 {
+        let w = (pf.big_r2 - d * d).max(0.0).sqrt();
+        let f = |s: f64| m * s - pf.height((d * d + s * s).sqrt().min(pf.big_r));
+        let (mut lo, mut hi) = (-w, w);
+        let k = 0.5 * (5f64.sqrt() - 1.0);
+        for _ in 0..200 {
+            let (x1, x2) = (hi - k * (hi - lo), lo + k * (hi - lo));
+            if f(x1) < f(x2) {
+                lo = x1;
+            } else {
+                hi = x2;
+            }
+        }
+        f(0.5 * (lo + hi))
+    }
+
+    fn profile(big_r: f64, r: f64) -> Profile {
+        Profile {
+            big_r,
+            big_r2: big_r * big_r,
+            r,
+            a: big_r - r,
+        }
+    }
+
+    proptest! {
+        /// The contact is a point of the line and the cutter (height m·t − h equals the
+        /// brute-force maximum) for shallow, steep and nearly vertical edges, near and far
+        /// from the axis.
+        #[test]
+        fn torus_edge_contact_is_the_highest_tip(
+            big_r in 0.5..10.0f64,
+            share in 0.05..0.95f64,
+            dd in 0.0..0.999f64,
+            m in prop_oneof![-3.0..3.0f64, -1e3..1e3f64, (-9.0..9.0f64).prop_map(|e| 10f64.powf(e))],
+        ) {
+            let pf = profile(big_r, share * big_r);
+            let d = dd * big_r;
+            let (t, h) = torus_edge(&pf, d, m);
+            // The contact lies on the corner circle at ρ = sqrt(d² + t²): (ρ − a, r − h) has
+            // length r (checked as a residual: h from ρ is ill-conditioned near ρ = R).
+            let rho = (d * d + t * t).sqrt();
+            prop_assert!(rho <= big_r * (1.0 + 1e-12), "rho {rho} beyond R {big_r}");
+            let (x, y) = ((rho - pf.a).max(0.0), pf.r - h);
+            prop_assert!(
+                (x * x + y * y - pf.r * pf.r).abs() <= 1e-12 * big_r * big_r || (rho <= pf.a && h == 0.0),
+                "({x}, {y}) off the corner circle of radius {}", pf.r
+            );
+            // It is the highest tip along the line (its height no lower than the search's;
+            // a nearly vertical line's is ill-conditioned in s, so relative to |m|·R).
+            let tol = 1e-12 * big_r * (1.0 + m.abs());
+            let best = brute(&pf, d, m);
+            prop_assert!((m * t - h - best).abs() <= tol, "{} vs {best}", m * t - h);
+        }
+    }
 }
