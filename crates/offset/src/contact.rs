@@ -162,6 +162,10 @@ pub(crate) fn edge(pf: &Profile, x: f64, y: f64, p1: DVec3, p2: DVec3, best: f64
         if s0 > s1 || p1.z + m * (if m > 0.0 { s1 } else { s0 }) - hd <= best {
             return None;
         }
+        if tangent_bound(pf, d, m, hd, (s0 - u0, s1 - u0)) + p1.z + m * u0 + BOUND_MARGIN_MM <= best
+        {
+            return None;
+        }
     }
     // Offset t from the foot to the contact (sign of m: the contact is uphill) and the
     // cutter height h there.
@@ -195,6 +199,49 @@ pub(crate) fn edge(pf: &Profile, x: f64, y: f64, p1: DVec3, p2: DVec3, best: f64
     }
     let zc = p1.z + m * s;
     Some((zc - h, DVec3::new(p1.x + tx * s, p1.y + ty * s, zc)))
+}
+
+/// Slack (mm) added to [`tangent_bound`] before it turns an edge away, so that its rounding
+/// can never drop a contact that would have won: results are exactly those without it.
+const BOUND_MARGIN_MM: f64 = 1e-9;
+
+/// An upper bound on `max_σ m·σ − h(sqrt(d² + σ²))` over `σ ∈ [σ0, σ1]`: the tip's height
+/// (relative to the edge's height at the foot of the axis) along the stretch of an edge at
+/// XY distance `d` with slope `m` that the torus can reach; `hd = h(d)`.
+///
+/// `h` is convex on `[0, R]`, so it lies above its tangent `h(ρ0) + k·(ρ − ρ0)` at any
+/// `ρ0`, and `m·σ − k·sqrt(d² + σ²)` has its maximum in closed form (concave in `σ`: at
+/// `σ* = m·d / sqrt(k² − m²)` clamped to the stretch when `k > |m|`, else at the uphill
+/// end). The tangent is taken where it binds: at `ρ_m`, where the corner's slope is `|m|`
+/// (the contact lies no nearer the axis: there `h'(ρ)·ρ/sqrt(ρ² − d²) = |m|`), or at `d`
+/// if that is farther. Where the old bound `max z − h(d)` only knew the contact is at least
+/// `d` out, this one charges every mm the contact must climb the corner.
+#[inline]
+fn tangent_bound(pf: &Profile, d: f64, m: f64, hd: f64, (s0, s1): (f64, f64)) -> f64 {
+    let (a, r) = (pf.a, pf.r);
+    let am = m.abs();
+    let hyp = (1.0 + am * am).sqrt();
+    let rho_m = a + r * am / hyp;
+    let (rho0, h0, k) = if d <= rho_m {
+        // h(ρ_m) = r·(1 − cos φ) with tan φ = |m|.
+        (rho_m, r * (am * am) / (hyp * (1.0 + hyp)), am)
+    } else {
+        let e = d - a;
+        let q = (r * r - e * e).sqrt();
+        // At d = R (or NaN) the tangent is vertical: no bound.
+        if q.is_nan() || q <= 0.0 {
+            return f64::INFINITY;
+        }
+        (d, hd, e / q)
+    };
+    let sigma = if k > am {
+        (m * d / ((k - am) * (k + am)).sqrt()).clamp(s0, s1)
+    } else if m > 0.0 {
+        s1
+    } else {
+        s0
+    };
+    m * sigma - k * (d * d + sigma * sigma).sqrt() - h0 + k * rho0
 }
 
 /// Torus on a line at XY distance `d` from the axis with slope `m`: the offset `t` (signed
@@ -306,7 +353,7 @@ fn torus_edge(pf: &Profile, d: f64, m: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
-    use super::{Profile, torus_edge};
+    use super::{Profile, tangent_bound, torus_edge};
     use proptest::prelude::*;
 
     /// The cutter's highest tip along the line `z = m·s` at XY distance `d` from its axis,
@@ -314,8 +361,13 @@ mod tests {
     /// (`h` convex and increasing, `ρ` convex in `s`), so the bracket keeps the maximum.
     fn brute(pf: &Profile, d: f64, m: f64) -> f64 {
         let w = (pf.big_r2 - d * d).max(0.0).sqrt();
+        brute_on(pf, d, m, (-w, w))
+    }
+
+    /// [`brute`] on the stretch `s ∈ [s0, s1]` only.
+    fn brute_on(pf: &Profile, d: f64, m: f64, (s0, s1): (f64, f64)) -> f64 {
         let f = |s: f64| m * s - pf.height((d * d + s * s).sqrt().min(pf.big_r));
-        let (mut lo, mut hi) = (-w, w);
+        let (mut lo, mut hi) = (s0, s1);
         let k = 0.5 * (5f64.sqrt() - 1.0);
         for _ in 0..200 {
             let (x1, x2) = (hi - k * (hi - lo), lo + k * (hi - lo));
@@ -365,6 +417,24 @@ mod tests {
             let tol = 1e-12 * big_r * (1.0 + m.abs());
             let best = brute(&pf, d, m);
             prop_assert!((m * t - h - best).abs() <= tol, "{} vs {best}", m * t - h);
+        }
+
+        /// The tangent bound is never below the highest tip on any stretch within reach.
+        #[test]
+        fn tangent_bound_is_an_upper_bound(
+            big_r in 0.5..10.0f64,
+            share in 0.05..0.95f64,
+            dd in 0.0..1.0f64,
+            m in prop_oneof![-3.0..3.0f64, -1e3..1e3f64, (-9.0..9.0f64).prop_map(|e| 10f64.powf(e))],
+            (f0, f1) in (0.0..1.0f64, 0.0..1.0f64),
+        ) {
+            let pf = profile(big_r, share * big_r);
+            let d = dd * big_r;
+            let w = (pf.big_r2 - d * d).max(0.0).sqrt();
+            let (s0, s1) = (-w + 2.0 * w * f0.min(f1), -w + 2.0 * w * f0.max(f1));
+            let bound = tangent_bound(&pf, d, m, pf.height(d), (s0, s1));
+            let best = brute_on(&pf, d, m, (s0, s1));
+            prop_assert!(bound >= best - 1e-12 * big_r * (1.0 + m.abs()), "{bound} < {best}");
         }
     }
 }
