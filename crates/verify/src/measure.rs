@@ -1195,7 +1195,7 @@ fn measure_vectors(
     // `seeded`: whether a seed was tried, and its entry (`seed_entry`).
     let direct_one = |v: &Vector,
                       seeded: (bool, Option<(Entry, u32)>),
-                      queue: &mut Vec<(f64, u32)>,
+                      queue: &mut Vec<(f64, f64, u32)>,
                       among: Option<(&[u32], &[u32])>|
      -> PerVector {
         let mut stats = [0usize; 5];
@@ -1222,9 +1222,11 @@ fn measure_vectors(
         };
         let hi0 = found.map_or(v.hi, |(f, _)| f.s);
         if puck.a > 0.0 && puck.r > 0.0 {
-            // A bull's entry costs a Newton search: the moves whose capsule of radius
-            // `a + r` (which holds the puck: its entry is a lower bound) the segment enters,
-            // in the order of those bounds, until a bound lies beyond the best entry.
+            // A bull's entry costs a Newton search. The moves near the segment are taken in
+            // the order of where it enters their slab (the puck lies within `r` of the
+            // centres along `k`), a cheap bound; each is tried only if its capsule of radius
+            // `a + r` (which holds the puck) is entered before the best entry so far, until
+            // a slab's entry lies beyond it.
             queue.clear();
             let f = |ci: usize, hi: f64| {
                 let (_, mv, c0, c1) = volumes.items[ci];
@@ -1232,20 +1234,12 @@ fn measure_vectors(
                     return hi;
                 }
                 let k = axis_of(mv);
-                // The puck also lies in the slab `r` either side of the centres along `k`.
                 let Some((s0, s1)) = slab_interval(&line, k, c0.dot(k), c1.dot(k), puck.r) else {
                     return hi;
                 };
-                let seg = Line {
-                    lo: line.lo.max(s0),
-                    hi: hi.min(s1),
-                    ..line
-                };
-                if seg.lo > seg.hi {
-                    return hi;
-                }
-                if let Some(b) = crate::exact::capsule_entry(&seg, c0, c1, rr) {
-                    queue.push((b.s, ci as u32));
+                let (s0, s1) = (line.lo.max(s0), hi.min(s1));
+                if s0 <= s1 {
+                    queue.push((s0, s1, ci as u32));
                 }
                 hi
             };
@@ -1253,10 +1247,27 @@ fn measure_vectors(
                 Some((vols, _)) => volumes.visit_among(vols, &line, hi0, f),
                 None => volumes.visit(&line, hi0, f),
             }
-            queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
-            for &(bound, ci) in queue.iter() {
-                if found.is_some_and(|(f, _)| bound > f.s) {
+            queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.2.cmp(&q.2)));
+            for &(s0, s1, ci) in queue.iter() {
+                let best = found.map_or(hi0, |(f, _)| f.s);
+                if found.is_some() && s0 > best {
                     break;
+                }
+                let (_, mv, c0, c1) = volumes.items[ci as usize];
+                // With the best at the segment's start, only a lower-numbered move's tie
+                // could replace it (see `take_least`).
+                if found.is_some_and(|(f, m)| f.s <= line.lo && mv >= m) {
+                    continue;
+                }
+                let seg = Line {
+                    lo: s0,
+                    hi: best.min(s1),
+                    ..line
+                };
+                if seg.lo > seg.hi
+                    || crate::exact::capsule_entry(&seg, c0, c1, rr).is_none_or(|b| b.s > best)
+                {
+                    continue;
                 }
                 try_move(ci as usize, &mut found);
             }
