@@ -64,10 +64,17 @@ impl DropCutter {
         }
         // Triangles within reach: the cells the segment crosses list every triangle within
         // R of them.
+        // A triangle whose top is not above the floor over the chord's lower end cannot rise
+        // above it anywhere (the bound below is never larger): left out before the
+        // duplicates are sorted away.
+        let z_low = za.min(zb);
         let mut slots: Vec<u32> = Vec::new();
         for (c, _) in self.cells_on_segment(a, b) {
-            slots
-                .extend_from_slice(&self.items[self.start[c] as usize..self.start[c + 1] as usize]);
+            slots.extend(
+                self.items[self.start[c] as usize..self.start[c + 1] as usize]
+                    .iter()
+                    .filter(|&&s| self.tris[s as usize].top - z_low > floor_mm),
+            );
         }
         slots.sort_unstable();
         slots.dedup();
