@@ -66,14 +66,15 @@ impl DropCutter {
         // R of them.
         // A triangle whose top is not above the floor over the chord's lower end cannot rise
         // above it anywhere (the bound below is never larger): left out before the
-        // duplicates are sorted away.
+        // duplicates are sorted away. A cell lists its triangles by descending top, so the
+        // rest of the cell goes with the first such one.
         let z_low = za.min(zb);
         let mut slots: Vec<u32> = Vec::new();
         for (c, _) in self.cells_on_segment(a, b) {
             slots.extend(
                 self.items[self.start[c] as usize..self.start[c + 1] as usize]
                     .iter()
-                    .filter(|&&s| self.tris[s as usize].top - z_low > floor_mm),
+                    .take_while(|&&s| self.tris[s as usize].top - z_low > floor_mm),
             );
         }
         slots.sort_unstable();
