@@ -213,7 +213,7 @@ const BOUND_MARGIN_MM: f64 = 1e-9;
 /// `ρ0`, and `m·σ − k·sqrt(d² + σ²)` has its maximum in closed form (concave in `σ`: at
 /// `σ* = m·d / sqrt(k² − m²)` clamped to the stretch when `k > |m|`, else at the uphill
 /// end). The tangent is taken where it binds: at `ρ_m`, where the corner's slope is `|m|`
-/// (the contact lies no nearer the axis: there `h'(ρ)·ρ/sqrt(ρ² − d²) = |m|`), or at `d`
+/// (the contact lies no nearer the axis: there `h'(ρ)·sqrt(ρ² − d²)/ρ = |m|`), or at `d`
 /// if that is farther. Where the old bound `max z − h(d)` only knew the contact is at least
 /// `d` out, this one charges every mm the contact must climb the corner.
 #[inline]
