@@ -34,6 +34,12 @@ pub(crate) fn fixed(v: f64, decimals: usize) -> String {
             }
         }
     }
+    standard(v, decimals)
+}
+
+/// The standard formatter's text for `v` at `decimals` digits, without its negative zero:
+/// what [`fixed`] prints, the slow way.
+fn standard(v: f64, decimals: usize) -> String {
     let s = format!("{v:.decimals$}");
     if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
         s[1..].to_string()
@@ -66,17 +72,8 @@ fn push_scaled(out: &mut String, negative: bool, n: u64, decimals: usize) {
 
 #[cfg(test)]
 mod tests {
+    use super::standard as reference;
     use proptest::prelude::*;
-
-    /// The reference: the standard formatter without its negative zero.
-    fn reference(v: f64, d: usize) -> String {
-        let s = format!("{v:.d$}");
-        if s.starts_with('-') && s[1..].chars().all(|c| c == '0' || c == '.') {
-            s[1..].to_string()
-        } else {
-            s
-        }
-    }
 
     #[test]
     fn no_negative_zero() {

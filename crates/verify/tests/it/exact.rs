@@ -20,6 +20,12 @@ impl Lcg {
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
         lo + (hi - lo) * self.next()
     }
+    /// A point of the box [-2, 2] × [-2, 2] × [-1, 1] (mm): where the random moves start.
+    fn centre(&mut self) -> DVec3 {
+        let x = self.range(-2.0, 2.0);
+        let y = self.range(-2.0, 2.0);
+        DVec3::new(x, y, self.range(-1.0, 1.0))
+    }
     fn unit(&mut self) -> DVec3 {
         loop {
             let v = DVec3::new(
@@ -83,11 +89,7 @@ fn cases() -> Vec<Case> {
     let mut out = Vec::new();
     for i in 0..4000 {
         let k = if i % 4 == 0 { DVec3::Z } else { rng.unit() };
-        let c0 = DVec3::new(
-            rng.range(-2.0, 2.0),
-            rng.range(-2.0, 2.0),
-            rng.range(-1.0, 1.0),
-        );
+        let c0 = rng.centre();
         // Moves: general, level (⟂ k), along the axis, very short, zero.
         let mut d = rng.unit() * rng.range(0.0, 4.0);
         match i % 5 {
@@ -322,11 +324,7 @@ fn level_bull_translation_matches_instances() {
 /// line aimed within 3.5 mm of the move, searched over `[-4, 12]`.
 fn bull_case(rng: &mut Lcg, i: i32) -> (DVec3, DVec3, DVec3, Line) {
     let k = if i % 3 == 0 { DVec3::Z } else { rng.unit() };
-    let c0 = DVec3::new(
-        rng.range(-2.0, 2.0),
-        rng.range(-2.0, 2.0),
-        rng.range(-1.0, 1.0),
-    );
+    let c0 = rng.centre();
     let mut d = rng.unit() * rng.range(0.5, 4.0);
     match i % 4 {
         1 => {

@@ -580,6 +580,20 @@ fn a_flat_bottom_through_the_vertex_reads_zero() {
     }
 }
 
+/// The dense program of `fixtures/verify/mount_rush_bull_dense.ngc` and the design vertex
+/// (position, unit normal) it was cut about.
+fn dense_program() -> (Toolpath, DVec3, DVec3) {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/verify");
+    let tp = cam_gcode::read_gcode(
+        root.join("mount_rush_bull_dense.ngc"),
+        &cam_gcode::ReadConfig::default(),
+    )
+    .unwrap();
+    let o = DVec3::new(-25.489606857299805, -2.1983015537261963, 1.3206899166107178);
+    let n = DVec3::new(0.6608251943731915, -0.2218887422182684, 0.7169905498389979).normalize();
+    (tp, o, n)
+}
+
 /// A dense program read exactly: the feed moves of a bull-nose plan of mount_rush within
 /// 3 mm (in XY) of one design vertex, 2038 moves. Before the direct search of translation
 /// programs, the crossing locator overflowed on this vector (too many crossings within its
@@ -589,15 +603,8 @@ fn a_flat_bottom_through_the_vertex_reads_zero() {
 #[test]
 fn a_dense_program_is_read_exactly() {
     use cam_verify::exact::{Line, MoveGeometry, Puck};
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/verify");
-    let tp = cam_gcode::read_gcode(
-        root.join("mount_rush_bull_dense.ngc"),
-        &cam_gcode::ReadConfig::default(),
-    )
-    .unwrap();
+    let (tp, o, n) = dense_program();
     let bull = Cutter::bull(6.0, 1.5).unwrap();
-    let o = DVec3::new(-25.489606857299805, -2.1983015537261963, 1.3206899166107178);
-    let n = DVec3::new(0.6608251943731915, -0.2218887422182684, 0.7169905498389979).normalize();
     let cfg = DeviationConfig::default();
     let line = Line {
         o,
@@ -653,14 +660,7 @@ fn a_dense_program_is_read_exactly() {
 /// and column.
 #[test]
 fn a_dense_program_is_read_exactly_in_groups() {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/verify");
-    let tp = cam_gcode::read_gcode(
-        root.join("mount_rush_bull_dense.ngc"),
-        &cam_gcode::ReadConfig::default(),
-    )
-    .unwrap();
-    let o = DVec3::new(-25.489606857299805, -2.1983015537261963, 1.3206899166107178);
-    let n = DVec3::new(0.6608251943731915, -0.2218887422182684, 0.7169905498389979).normalize();
+    let (tp, o, n) = dense_program();
     let u = n.any_orthonormal_vector();
     let w = n.cross(u);
     let mut lines = Vec::new();
