@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use cam_core::{Cutter, DVec3, Mesh, Toolpath};
+use rayon::prelude::*;
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError, TriangleBvh};
 use crate::material;
@@ -269,16 +270,17 @@ fn crease_depths(
     }
     let crease = CREASE_DEG.to_radians().cos();
     let sharp = |i: usize| cos_min[i] < crease || on_rim[i];
-    for (i, d) in devs.iter_mut().enumerate() {
+    // Each vertex on its own: in parallel.
+    devs.par_iter_mut().enumerate().for_each(|(i, d)| {
         let Some(s) = d.signed_mm.filter(|s| *s < 0.0) else {
-            continue;
+            return;
         };
         // A smooth vertex whose entry point lies nearer to another part of the design than
         // to its own face sees a crease's glancing geometry too: its vector runs under an
         // edge within that distance.
         let entry = refined.positions[i] + s * refined.normals[i];
         if !sharp(i) && !unoriented[i] && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none() {
-            continue;
+            return;
         }
         let first_order = s * m.facing[i].abs().min(1.0);
         let depth = match (exact, m.source[i]) {
@@ -302,7 +304,7 @@ fn crease_depths(
         } else {
             first_order
         });
-    }
+    });
 }
 
 /// Verifies `toolpath` (tool-tip poses) cut by `cutter` against `part`.

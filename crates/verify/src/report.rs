@@ -4,6 +4,8 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+use rayon::prelude::*;
+
 use crate::deviation::{Deviation, DeviationConfig};
 use crate::refine::RefineConfig;
 
@@ -165,7 +167,8 @@ pub fn build_report(
     let tol = cfg.tolerance_mm;
     let values: Vec<f64> = devs.iter().filter_map(|d| d.signed_mm).collect();
     let mut sorted = values.clone();
-    sorted.sort_by(f64::total_cmp);
+    // Equal under `total_cmp` means bit-identical: any sort gives the same order.
+    sorted.par_sort_unstable_by(f64::total_cmp);
     let measured = values.len();
     let mean = if measured > 0 {
         values.iter().sum::<f64>() / measured as f64
@@ -223,7 +226,7 @@ pub fn build_report(
             let v = devs[*i].signed_mm.unwrap_or(0.0);
             if kind == Finding::Gouge { v } else { -v }
         };
-        idx.sort_by(|a, b| key(a).total_cmp(&key(b)).then(a.cmp(b)));
+        idx.par_sort_unstable_by(|a, b| key(a).total_cmp(&key(b)).then(a.cmp(b)));
         let mut out: Vec<WorstLocation> = Vec::new();
         let sep2 = cfg.worst_separation_mm * cfg.worst_separation_mm;
         for i in idx {
