@@ -12,6 +12,7 @@ pub mod measure;
 pub mod model;
 pub mod pipeline;
 pub mod ply;
+mod polycdt;
 pub mod proximity;
 pub mod rapids;
 pub mod refine;

@@ -10,8 +10,9 @@
 //!   same points for both faces sharing it, so the mesh stays conforming);
 //! * the face's interior gets a triangular lattice of spacing `LATTICE · s`, rows parallel to
 //!   its first edge from its first corner, kept half a spacing from the sides;
-//! * boundary and lattice points are joined by a constrained Delaunay triangulation (spade)
-//!   of the face's plane, and only the triangles inside the boundary are kept.
+//! * boundary and lattice points are joined by a constrained Delaunay triangulation of the
+//!   face's plane ([`crate::polycdt`]; spade where that cannot place a point, with the same
+//!   result wherever the triangulation is unique).
 //!
 //! Inner edges still longer than `s` (where the lattice meets the boundary) get their
 //! midpoints inserted until none is left; whatever is left longer (faces only partly in the
@@ -32,6 +33,8 @@ use std::hash::BuildHasherDefault;
 use cam_core::DVec3;
 use rayon::prelude::*;
 use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+
+use crate::polycdt::PolyCdt;
 
 /// Lattice spacing as a share of the longest edge allowed.
 pub const LATTICE: f64 = 0.95;
@@ -137,13 +140,14 @@ pub(crate) fn remesh(
     let meshes: Vec<Option<FaceMesh>> = tris0
         .par_iter()
         .zip(&active)
-        .map(|(t, &act)| {
+        .map_init(Scratch::default, |scratch, (t, &act)| {
             let touched = (0..3)
                 .any(|k| divided.contains_key(&crate::refine::edge_key(t[k], t[(k + 1) % 3])));
             if !act && !touched {
                 return None;
             }
             let fm = face_mesh(
+                scratch,
                 pos0,
                 &pos,
                 &divided,
@@ -305,8 +309,127 @@ fn lattice_points(
 }
 
 /// The triangulation of face `t`: its boundary (corners and the points of its divided
-/// edges, in its own order) and, when `h > 0`, a lattice of spacing `h` inside.
+/// edges, in its own order) and, when `h > 0`, a lattice of spacing `h` inside; then
+/// midpoints on the inner edges still longer than `s`. Built by [`PolyCdt`]; where that
+/// cannot place a point, by spade ([`face_mesh_spade`]), which gives the same triangles
+/// wherever the Delaunay triangulation is unique.
+#[allow(clippy::too_many_arguments)]
 fn face_mesh(
+    scratch: &mut Scratch,
+    pos0: &[DVec3],
+    pos: &[DVec3],
+    divided: &IntMap<u64, (u32, u32)>,
+    t: &[u32; 3],
+    h: f64,
+    s: f64,
+    near: &dyn Fn(DVec3) -> bool,
+) -> Option<FaceMesh> {
+    face_mesh_own(scratch, pos0, pos, divided, t, h, s, near)
+        .or_else(|| face_mesh_spade(pos0, pos, divided, t, h, s, near))
+}
+
+/// A worker's memory for [`face_mesh_own`], reused from face to face.
+#[derive(Default)]
+struct Scratch {
+    cdt: PolyCdt,
+    pts: Vec<[f64; 2]>,
+    flat: Vec<[f64; 2]>,
+    mids: Vec<([f64; 2], u32)>,
+}
+
+/// [`face_mesh`] by [`PolyCdt`]; `None` where it cannot place a point or the result is not
+/// a triangulation of the face.
+#[allow(clippy::too_many_arguments)]
+fn face_mesh_own(
+    scratch: &mut Scratch,
+    pos0: &[DVec3],
+    pos: &[DVec3],
+    divided: &IntMap<u64, (u32, u32)>,
+    t: &[u32; 3],
+    h: f64,
+    s: f64,
+    near: &dyn Fn(DVec3) -> bool,
+) -> Option<FaceMesh> {
+    let frame = Frame::new(pos0, t)?;
+    let (a, x, y) = (frame.a, frame.x, frame.y);
+    let ids = boundary(divided, t);
+    let nb = ids.len();
+    let corner = |c: u32| ids.iter().position(|&i| i == c);
+    let corners = [0, corner(t[1])?, corner(t[2])?];
+    let Scratch {
+        cdt,
+        pts,
+        flat,
+        mids,
+    } = scratch;
+    pts.clear();
+    pts.extend(ids.iter().map(|&i| {
+        let p = frame.to2(pos[i as usize]);
+        [p.x, p.y]
+    }));
+    let mut lattice = Vec::new();
+    flat.clear();
+    if h > 0.0 {
+        lattice_points(&frame, h, near, usize::MAX, |px, py, p| {
+            flat.push([px, py]);
+            lattice.push(p);
+        });
+    }
+    // Room for the midpoints too (about half as many again).
+    cdt.reset(pts, corners, flat.len() + flat.len() / 2 + nb)?;
+    for &p in flat.iter() {
+        cdt.insert(p)?;
+    }
+    // Inner edges still longer than `s` get their midpoints (see `face_mesh_spade`).
+    if h > 0.0 {
+        let (b2, c2) = (frame.to2(frame.b), frame.to2(frame.c));
+        let inside = |p: [f64; 2]| {
+            let cross = |o: [f64; 2], q: [f64; 2]| {
+                (q[0] - o[0]) * (p[1] - o[1]) - (q[1] - o[1]) * (p[0] - o[0])
+            };
+            let tol = 1e-9 * s * s;
+            let (b2, c2) = ([b2.x, b2.y], [c2.x, c2.y]);
+            cross([0.0, 0.0], b2) > tol && cross(b2, c2) > tol && cross(c2, [0.0, 0.0]) > tol
+        };
+        for _ in 0..MAX_ROUNDS {
+            mids.clear();
+            mids.extend(cdt.inner_edges().filter_map(|(p, q, t)| {
+                let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+                let m = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+                (dx * dx + dy * dy > s * s && inside(m) && near(a + m[0] * x + m[1] * y))
+                    .then_some((m, t))
+            }));
+            if mids.is_empty() {
+                break;
+            }
+            for &(m, t) in mids.iter() {
+                cdt.insert_near(m, t)?;
+                lattice.push(a + m[0] * x + m[1] * y);
+            }
+        }
+    }
+    let tris: Vec<[Local; 3]> = cdt
+        .triangles()
+        .iter()
+        .map(|v| {
+            v.map(|i| {
+                let i = i as usize;
+                if i < nb {
+                    Local::Global(ids[i])
+                } else {
+                    Local::Lattice((i - nb) as u32)
+                }
+            })
+        })
+        .collect();
+    if tris.len() != nb + 2 * lattice.len() - 2 || cdt.num_points() != nb + lattice.len() {
+        return None;
+    }
+    Some(FaceMesh { lattice, tris })
+}
+
+/// [`face_mesh`] by spade's constrained Delaunay triangulation.
+fn face_mesh_spade(
     pos0: &[DVec3],
     pos: &[DVec3],
     divided: &IntMap<u64, (u32, u32)>,
@@ -466,5 +589,91 @@ mod tests {
             area += 0.5 * cr.length();
         }
         assert!((area - 0.5 * n.length()).abs() < 1e-12, "{area}");
+    }
+
+    /// The own triangulation and spade's give the same face meshes: the same lattice and
+    /// midpoints (as a set of points) and the same triangles (as triples of points), on
+    /// random faces from slivers to faces some fifty times the edge bound across.
+    #[test]
+    fn own_triangulation_matches_spade() {
+        let mut seed = 11u64;
+        let mut rnd = || {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let s = 0.3;
+        let mut faces = 0;
+        for _ in 0..300 {
+            let size = 0.2 + 15.0 * rnd() * rnd();
+            let pos0: Vec<DVec3> = (0..3)
+                .map(|_| size * DVec3::new(rnd(), rnd(), 0.3 * rnd()))
+                .collect();
+            let t = [0u32, 1, 2];
+            if Frame::new(&pos0, &t).is_none() {
+                continue;
+            }
+            // Divide the edges longer than s as `remesh` does.
+            let mut pos = pos0.clone();
+            let mut divided: IntMap<u64, (u32, u32)> = IntMap::default();
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                let l = pos0[a as usize].distance(pos0[b as usize]);
+                if l <= s {
+                    continue;
+                }
+                let m = (l / s * (1.0 + 1e-12)).ceil() as u32;
+                let (lo, hi) = (a.min(b), a.max(b));
+                let first = pos.len() as u32;
+                for i in 1..m {
+                    pos.push(
+                        pos0[lo as usize].lerp(pos0[hi as usize], f64::from(i) / f64::from(m)),
+                    );
+                }
+                divided.insert(crate::refine::edge_key(a, b), (first, m - 1));
+            }
+            let near = |_: DVec3| true;
+            let own = face_mesh_own(
+                &mut Scratch::default(),
+                &pos0,
+                &pos,
+                &divided,
+                &t,
+                LATTICE * s,
+                s,
+                &near,
+            )
+            .expect("own triangulation");
+            let theirs =
+                face_mesh_spade(&pos0, &pos, &divided, &t, LATTICE * s, s, &near).expect("spade");
+            let key = |fm: &FaceMesh| {
+                let at = |l: Local| match l {
+                    Local::Global(g) => pos[g as usize],
+                    Local::Lattice(i) => fm.lattice[i as usize],
+                };
+                let mut tris: Vec<[[u64; 3]; 3]> = fm
+                    .tris
+                    .iter()
+                    .map(|tri| {
+                        let mut v = tri.map(|l| at(l).to_array().map(f64::to_bits));
+                        let r = (0..3).min_by_key(|&k| v[k]).unwrap();
+                        v.rotate_left(r);
+                        v
+                    })
+                    .collect();
+                tris.sort_unstable();
+                let mut pts: Vec<[u64; 3]> = fm
+                    .lattice
+                    .iter()
+                    .map(|p| p.to_array().map(f64::to_bits))
+                    .collect();
+                pts.sort_unstable();
+                (pts, tris)
+            };
+            assert_eq!(key(&own), key(&theirs), "face of size {size}");
+            faces += 1;
+        }
+        assert!(faces > 250);
     }
 }

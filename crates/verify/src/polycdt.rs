@@ -1,0 +1,444 @@
+//! Constrained Delaunay triangulation of one design face's points in its own plane, for the
+//! remesh ([`crate::remesh`]): a convex polygon (the face's corners and the points dividing
+//! its edges, counter-clockwise) and points strictly inside it.
+//!
+//! Lawson's incremental algorithm on exact predicates (the `robust` crate): the polygon's
+//! corners make the first triangle, each edge point splits its hull edge, each inner point
+//! splits the triangle (or the inner edge) it falls in, and edges that are not locally
+//! Delaunay are flipped. Hull edges (the polygon's sides) are never flipped, so they are the
+//! constraints, and no triangle ever lies outside the polygon, even where rounding puts an
+//! edge point a hair off its side. Where the Delaunay triangulation is unique (no four
+//! points on one empty circle) the result is the constrained Delaunay triangulation spade
+//! builds, at a fraction of its cost for the few dozen points of a typical face; a point
+//! that cannot be placed (a duplicate, or one outside the polygon) makes the whole
+//! triangulation fail and the caller falls back to spade.
+
+use robust::{Coord, incircle, orient2d};
+
+/// No neighbour across an edge: a side of the polygon.
+const NONE: u32 = u32::MAX;
+
+/// A triangulation under construction: counter-clockwise triangles over `pts`, and per
+/// triangle the neighbour across each edge `k` (from corner `k` to corner `k + 1`).
+#[derive(Default)]
+pub(crate) struct PolyCdt {
+    pts: Vec<[f64; 2]>,
+    tris: Vec<[u32; 3]>,
+    adj: Vec<[u32; 3]>,
+    /// The triangle a walk starts from (the last one made).
+    last: u32,
+    /// Edges waiting for the Delaunay test: (triangle, edge index).
+    stack: Vec<(u32, usize)>,
+}
+
+fn coord(p: [f64; 2]) -> Coord<f64> {
+    Coord { x: p[0], y: p[1] }
+}
+
+impl PolyCdt {
+    /// The polygon `boundary` (counter-clockwise; `corners` the indices within it of the
+    /// three corners, the first being 0), triangulated, with room for `inner` more points.
+    /// `None` when the corners do not turn counter-clockwise or a point cannot be placed.
+    #[cfg(test)]
+    pub(crate) fn new(boundary: &[[f64; 2]], corners: [usize; 3], inner: usize) -> Option<PolyCdt> {
+        let mut cdt = PolyCdt::default();
+        cdt.reset(boundary, corners, inner)?;
+        Some(cdt)
+    }
+
+    /// [`PolyCdt::new`] in place, reusing this triangulation's memory.
+    pub(crate) fn reset(
+        &mut self,
+        boundary: &[[f64; 2]],
+        corners: [usize; 3],
+        inner: usize,
+    ) -> Option<()> {
+        let [c0, c1, c2] = corners;
+        if c0 != 0 || !(c0 < c1 && c1 < c2 && c2 < boundary.len()) {
+            return None;
+        }
+        let n = boundary.len() + inner;
+        self.pts.clear();
+        self.pts.reserve(n);
+        self.pts.extend_from_slice(boundary);
+        self.tris.clear();
+        self.tris.reserve(2 * n);
+        self.adj.clear();
+        self.adj.reserve(2 * n);
+        self.tris.push([c0 as u32, c1 as u32, c2 as u32]);
+        self.adj.push([NONE; 3]);
+        self.last = 0;
+        self.stack.clear();
+        let cdt = self;
+        if orient2d(
+            coord(boundary[c0]),
+            coord(boundary[c1]),
+            coord(boundary[c2]),
+        ) <= 0.0
+        {
+            return None;
+        }
+        // The points of each side in order: each splits the hull edge from the previous
+        // point to the side's end corner.
+        let n = boundary.len();
+        for (from, to) in [(c0, c1), (c1, c2), (c2, n)] {
+            let end = (to % n) as u32;
+            // The hull edge to split: in the triangle the previous split made (flips about
+            // the new point keep it there), else searched for.
+            let mut at = (0, 0);
+            for i in from + 1..to {
+                let (t, k) = if cdt.has_hull_edge(at, i as u32 - 1, end) {
+                    at
+                } else {
+                    cdt.hull_edge(i as u32 - 1, end)?
+                };
+                let t1 = cdt.tris.len() as u32;
+                cdt.split_edge(t, k, i as u32);
+                cdt.legalize();
+                // The split's second triangle held the new hull edge from the new point.
+                at = (0..3)
+                    .find(|&k| cdt.has_hull_edge((t1, k), i as u32, end))
+                    .map_or((0, 0), |k| (t1, k));
+            }
+        }
+        Some(())
+    }
+
+    /// Whether edge `k` of triangle `t` is the directed hull edge `a → b`.
+    fn has_hull_edge(&self, (t, k): (u32, usize), a: u32, b: u32) -> bool {
+        let (v, nb) = (self.tris[t as usize], self.adj[t as usize]);
+        nb[k] == NONE && v[k] == a && v[(k + 1) % 3] == b
+    }
+
+    /// The triangle and edge index holding the directed hull edge `a → b`.
+    fn hull_edge(&self, a: u32, b: u32) -> Option<(u32, usize)> {
+        self.tris
+            .iter()
+            .zip(&self.adj)
+            .enumerate()
+            .find_map(|(t, (v, nb))| {
+                (0..3)
+                    .find(|&k| nb[k] == NONE && v[k] == a && v[(k + 1) % 3] == b)
+                    .map(|k| (t as u32, k))
+            })
+    }
+
+    /// Number of points (boundary first, then the inner points in the order inserted).
+    pub(crate) fn num_points(&self) -> usize {
+        self.pts.len()
+    }
+
+    /// The triangles (counter-clockwise, as point indices).
+    pub(crate) fn triangles(&self) -> &[[u32; 3]] {
+        &self.tris
+    }
+
+    /// The inner edges (each once) as point pairs, with a triangle beside each (a place to
+    /// start [`PolyCdt::insert_near`] from).
+    pub(crate) fn inner_edges(&self) -> impl Iterator<Item = ([f64; 2], [f64; 2], u32)> + '_ {
+        self.tris
+            .iter()
+            .zip(&self.adj)
+            .enumerate()
+            .flat_map(move |(t, (v, nb))| {
+                (0..3)
+                    .filter(move |&k| nb[k] != NONE && (t as u32) < nb[k])
+                    .map(move |k| {
+                        (
+                            self.pts[v[k] as usize],
+                            self.pts[v[(k + 1) % 3] as usize],
+                            t as u32,
+                        )
+                    })
+            })
+    }
+
+    /// Inserts the point `p` strictly inside the polygon; `None` (the triangulation is then
+    /// unusable) when it lies on a vertex, outside the polygon or on its sides.
+    pub(crate) fn insert(&mut self, p: [f64; 2]) -> Option<()> {
+        self.insert_near(p, self.last)
+    }
+
+    /// [`PolyCdt::insert`], the search for `p` starting at triangle `hint`.
+    pub(crate) fn insert_near(&mut self, p: [f64; 2], hint: u32) -> Option<()> {
+        let i = self.pts.len() as u32;
+        self.pts.push(p);
+        let q = coord(p);
+        let mut t = if (hint as usize) < self.tris.len() {
+            hint
+        } else {
+            self.last
+        };
+        // A walk towards `p`; bounded, as a guard against cycling.
+        let mut steps = 0;
+        loop {
+            steps += 1;
+            if steps > 4 * self.tris.len() + 16 {
+                return None;
+            }
+            let v = self.tris[t as usize];
+            let mut on = None;
+            let mut moved = false;
+            for k in 0..3 {
+                let o = orient2d(
+                    coord(self.pts[v[k] as usize]),
+                    coord(self.pts[v[(k + 1) % 3] as usize]),
+                    q,
+                );
+                if o < 0.0 {
+                    let nb = self.adj[t as usize][k];
+                    if nb == NONE {
+                        return None;
+                    }
+                    t = nb;
+                    moved = true;
+                    break;
+                }
+                if o == 0.0 {
+                    if on.is_some() {
+                        // On two edges: a vertex.
+                        return None;
+                    }
+                    on = Some(k);
+                }
+            }
+            if moved {
+                continue;
+            }
+            match on {
+                None => self.split_triangle(t, i),
+                Some(k) if self.adj[t as usize][k] != NONE => self.split_edge(t, k, i),
+                Some(_) => return None,
+            }
+            self.legalize();
+            return Some(());
+        }
+    }
+
+    /// Replaces triangle `t` by three about the new point `p` inside it.
+    fn split_triangle(&mut self, t: u32, p: u32) {
+        let [a, b, c] = self.tris[t as usize];
+        let [nab, nbc, nca] = self.adj[t as usize];
+        let (t1, t2) = (self.tris.len() as u32, self.tris.len() as u32 + 1);
+        self.tris[t as usize] = [a, b, p];
+        self.adj[t as usize] = [nab, t1, t2];
+        self.tris.push([b, c, p]);
+        self.adj.push([nbc, t2, t]);
+        self.tris.push([c, a, p]);
+        self.adj.push([nca, t, t1]);
+        self.repoint(nbc, t, t1);
+        self.repoint(nca, t, t2);
+        self.stack.extend([(t, 0), (t1, 0), (t2, 0)]);
+        self.last = t;
+    }
+
+    /// Splits edge `k` of triangle `t` at the new point `p` on it (and the triangle across
+    /// it, if any).
+    fn split_edge(&mut self, t: u32, k: usize, p: u32) {
+        let v = self.tris[t as usize];
+        let nb = self.adj[t as usize];
+        let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+        let (nbc, nca) = (nb[(k + 1) % 3], nb[(k + 2) % 3]);
+        let u = nb[k];
+        let t1 = self.tris.len() as u32;
+        let u1 = t1 + 1;
+        let has_u = u != NONE;
+        self.tris[t as usize] = [a, p, c];
+        self.adj[t as usize] = [if has_u { u1 } else { NONE }, t1, nca];
+        self.tris.push([p, b, c]);
+        self.adj.push([if has_u { u } else { NONE }, nbc, t]);
+        self.repoint(nbc, t, t1);
+        self.stack.extend([(t, 2), (t1, 1)]);
+        if has_u {
+            let w = self.tris[u as usize];
+            let wn = self.adj[u as usize];
+            let j = (0..3)
+                .find(|&j| w[j] == b && w[(j + 1) % 3] == a)
+                .expect("neighbours share the edge");
+            let d = w[(j + 2) % 3];
+            let (nad, ndb) = (wn[(j + 1) % 3], wn[(j + 2) % 3]);
+            self.tris[u as usize] = [b, p, d];
+            self.adj[u as usize] = [t1, u1, ndb];
+            self.tris.push([p, a, d]);
+            self.adj.push([t, nad, u]);
+            self.repoint(nad, u, u1);
+            self.stack.extend([(u, 2), (u1, 1)]);
+        }
+        self.last = t;
+    }
+
+    /// In triangle `n` (if any), the neighbour `old` becomes `new`.
+    fn repoint(&mut self, n: u32, old: u32, new: u32) {
+        if n == NONE {
+            return;
+        }
+        for x in &mut self.adj[n as usize] {
+            if *x == old {
+                *x = new;
+                return;
+            }
+        }
+    }
+
+    /// Flips the edges on the stack that are not locally Delaunay (the point opposite across
+    /// an inner edge strictly inside the circle of the triangle), and the edges that then
+    /// face the new point.
+    fn legalize(&mut self) {
+        while let Some((t, k)) = self.stack.pop() {
+            let u = self.adj[t as usize][k];
+            if u == NONE {
+                continue;
+            }
+            let v = self.tris[t as usize];
+            let (a, b, p) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+            let w = self.tris[u as usize];
+            let Some(j) = (0..3).find(|&j| w[j] == b && w[(j + 1) % 3] == a) else {
+                continue;
+            };
+            let q = w[(j + 2) % 3];
+            let pt = |i: u32| coord(self.pts[i as usize]);
+            if incircle(pt(a), pt(b), pt(p), pt(q)) <= 0.0 {
+                continue;
+            }
+            // Quad a, q, b, p (counter-clockwise): the diagonal a–b becomes p–q.
+            let tn = self.adj[t as usize];
+            let un = self.adj[u as usize];
+            let (nbp, npa) = (tn[(k + 1) % 3], tn[(k + 2) % 3]);
+            let (naq, nqb) = (un[(j + 1) % 3], un[(j + 2) % 3]);
+            self.tris[t as usize] = [a, q, p];
+            self.adj[t as usize] = [naq, u, npa];
+            self.tris[u as usize] = [q, b, p];
+            self.adj[u as usize] = [nqb, nbp, t];
+            self.repoint(naq, u, t);
+            self.repoint(nbp, t, u);
+            // The edges now facing p: a–q in t, q–b in u.
+            self.stack.extend([(t, 0), (u, 0)]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
+
+    /// Deterministic pseudo-random numbers in [0, 1).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// A random triangle's polygon (sides divided into 1–5 parts) and random points inside.
+    fn case(rng: &mut Lcg) -> (Vec<[f64; 2]>, [usize; 3], Vec<[f64; 2]>) {
+        let c = [
+            [0.0, 0.0],
+            [1.0 + rng.next(), 0.0],
+            [rng.next() * 2.0 - 0.5, 0.3 + rng.next()],
+        ];
+        let mut boundary = Vec::new();
+        let mut corners = [0; 3];
+        for k in 0..3 {
+            corners[k] = boundary.len();
+            let (p, q) = (c[k], c[(k + 1) % 3]);
+            let m = 1 + (rng.next() * 5.0) as usize;
+            for i in 0..m {
+                let f = i as f64 / m as f64;
+                boundary.push([p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])]);
+            }
+        }
+        let mut inner = Vec::new();
+        while inner.len() < 30 {
+            let (u, v) = (rng.next(), rng.next());
+            if u + v < 0.96 && u > 0.02 && v > 0.02 {
+                let w = 1.0 - u - v;
+                inner.push([
+                    u * c[0][0] + v * c[1][0] + w * c[2][0],
+                    u * c[0][1] + v * c[1][1] + w * c[2][1],
+                ]);
+            }
+        }
+        (boundary, corners, inner)
+    }
+
+    fn sorted(mut t: Vec<[u32; 3]>) -> Vec<[u32; 3]> {
+        for x in &mut t {
+            let r = (0..3).min_by_key(|&k| x[k]).unwrap();
+            x.rotate_left(r);
+        }
+        t.sort_unstable();
+        t
+    }
+
+    /// Random faces: the same triangles as spade's constrained Delaunay triangulation (its
+    /// faces inside the polygon), each counter-clockwise, as many as a triangulation of the
+    /// polygon with its inner points has.
+    #[test]
+    fn matches_spade_on_random_faces() {
+        let mut rng = Lcg(7);
+        for _ in 0..500 {
+            let (boundary, corners, inner) = case(&mut rng);
+            let mut ours = PolyCdt::new(&boundary, corners, inner.len()).expect("polygon");
+            for &p in &inner {
+                ours.insert(p).expect("inner point");
+            }
+            let nb = boundary.len();
+            assert_eq!(ours.triangles().len(), nb + 2 * inner.len() - 2);
+            for t in ours.triangles() {
+                let [a, b, c] = t.map(|i| coord(ours.pts[i as usize]));
+                assert!(orient2d(a, b, c) > 0.0);
+            }
+            let pts: Vec<Point2<f64>> = boundary
+                .iter()
+                .chain(&inner)
+                .map(|p| Point2::new(p[0], p[1]))
+                .collect();
+            let edges: Vec<[usize; 2]> = (0..nb).map(|i| [i, (i + 1) % nb]).collect();
+            let cdt: ConstrainedDelaunayTriangulation<Point2<f64>> =
+                ConstrainedDelaunayTriangulation::bulk_load_cdt(pts, edges).expect("spade");
+            // Spade's faces outside the polygon: slivers between points of one side that
+            // rounding put a hair inside it (all three corners on that side, turning
+            // against the side's order).
+            let along = |k: usize, i: u32| {
+                let (from, to) = (corners[k], if k == 2 { nb } else { corners[k + 1] });
+                let i = if k == 2 && i == 0 { nb } else { i as usize };
+                (from..=to).contains(&i).then_some(i)
+            };
+            let outside = |t: &[u32; 3]| {
+                (0..3).any(|k| match t.map(|i| along(k, i)) {
+                    [Some(a), Some(b), Some(c)] => {
+                        let r = [a, b, c];
+                        let m = (0..3).min_by_key(|&j| r[j]).unwrap();
+                        r[(m + 1) % 3] > r[(m + 2) % 3]
+                    }
+                    _ => false,
+                })
+            };
+            let theirs: Vec<[u32; 3]> = cdt
+                .inner_faces()
+                .map(|f| f.vertices().map(|v| v.fix().index() as u32))
+                .filter(|t| !outside(t))
+                .collect();
+            assert_eq!(sorted(ours.triangles().to_vec()), sorted(theirs));
+        }
+    }
+
+    /// A point on a vertex or outside the polygon is refused, not placed.
+    #[test]
+    fn refuses_duplicates_and_outside_points() {
+        let boundary = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        let mut cdt = PolyCdt::new(&boundary, [0, 1, 2], 2).unwrap();
+        cdt.insert([0.25, 0.25]).unwrap();
+        assert!(cdt.insert([0.25, 0.25]).is_none());
+        let mut cdt = PolyCdt::new(&boundary, [0, 1, 2], 2).unwrap();
+        assert!(cdt.insert([1.0, 1.0]).is_none());
+        // Clockwise corners are refused.
+        assert!(PolyCdt::new(&[[0.0, 0.0], [0.0, 1.0], [1.0, 0.0]], [0, 1, 2], 0).is_none());
+    }
+}
