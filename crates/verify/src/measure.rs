@@ -830,7 +830,20 @@ impl Extras {
 }
 
 /// Whether the segment `o + s·n`, `s ∈ [t0, t1]`, meets the box (boundary included).
+/// Without a branch per axis where the line crosses every slab (`inv` finite): the same
+/// decisions as [`segment_box_axes`], whose interval only ever narrows.
+#[inline]
 fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
+    if !inv.is_finite() {
+        return segment_box_axes(o, inv, min, max, t0, t1);
+    }
+    let (ta, tb) = ((min - o) * inv, (max - o) * inv);
+    ta.min(tb).max_element().max(t0) <= ta.max(tb).min_element().min(t1)
+}
+
+/// [`segment_box`] axis by axis, a line parallel to a slab (infinite `inv`) inside it or
+/// nowhere.
+fn segment_box_axes(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
     let (mut lo, mut hi) = (t0, t1);
     for a in 0..3 {
         if inv[a].is_infinite() {
@@ -1591,7 +1604,7 @@ fn measure_vectors(
             let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
             let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
             order.sort_unstable();
-            let mut done: Vec<(u32, PerVector)> = order
+            let done: Vec<(u32, PerVector)> = order
                 .par_chunks(DIRECT_TILE)
                 .flat_map_iter(|tile| {
                     let (mut seed, mut queue) = (None, Vec::new());
@@ -1649,8 +1662,18 @@ fn measure_vectors(
                     out
                 })
                 .collect();
-            done.sort_unstable_by_key(|&(i, _)| i);
-            per.extend(done.into_iter().map(|(_, r)| r));
+            // Back in the vectors' order: each index once, placed (no sort of these
+            // large records).
+            let mut placed: Vec<Option<PerVector>> = Vec::with_capacity(done.len());
+            placed.resize_with(done.len(), || None);
+            for (i, r) in done {
+                placed[i as usize] = Some(r);
+            }
+            per.extend(
+                placed
+                    .into_iter()
+                    .map(|r| r.expect("every vector of the chunk measured once")),
+            );
         } else {
             let found = find(chunk);
             per.par_extend(chunk.par_iter().zip(found.par_iter()).map(one));
