@@ -830,14 +830,16 @@ impl Extras {
 }
 
 /// Whether the segment `o + s·n`, `s ∈ [t0, t1]`, meets the box (boundary included).
-/// Without a branch per axis where the line crosses every slab (`inv` finite): the same
-/// decisions as [`segment_box_axes`], whose interval only ever narrows.
-#[inline]
+/// Without a branch per axis: the same decisions as [`segment_box_axes`], whose interval
+/// only ever narrows. A line parallel to a slab (infinite `inv`) gets `±∞` bounds from it,
+/// which leave the interval whole inside the slab and empty outside; only where it runs in
+/// the slab's boundary plane (`0·∞`) is the axis-by-axis test needed.
+#[inline(always)]
 fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
-    if !inv.is_finite() {
+    let (ta, tb) = ((min - o) * inv, (max - o) * inv);
+    if (ta.is_nan_mask() | tb.is_nan_mask()).any() {
         return segment_box_axes(o, inv, min, max, t0, t1);
     }
-    let (ta, tb) = ((min - o) * inv, (max - o) * inv);
     ta.min(tb).max_element().max(t0) <= ta.max(tb).min_element().min(t1)
 }
 
@@ -1710,5 +1712,46 @@ fn measure_vectors(
         source,
         from_start,
         stats,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A coordinate that is often exactly one of a few values, so that lines run along box
+    /// faces and parallel to slabs.
+    fn coord() -> impl Strategy<Value = f64> {
+        prop_oneof![-2.0..2.0f64, Just(-1.0), Just(0.0), Just(1.0)]
+    }
+
+    fn v3() -> impl Strategy<Value = DVec3> {
+        (coord(), coord(), coord()).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20_000))]
+
+        /// The branch-free box test decides as the axis-by-axis one, lines parallel to
+        /// slabs and lying in their boundary planes included.
+        #[test]
+        fn segment_box_decides_as_axis_by_axis(
+            o in v3(),
+            n in v3(),
+            a in v3(),
+            b in v3(),
+            t0 in prop_oneof![-3.0..3.0f64, Just(0.0)],
+            len in prop_oneof![0.0..4.0f64, Just(0.0)],
+        ) {
+            prop_assume!(n.length() > 1e-3);
+            let n = n.normalize();
+            let inv = DVec3::new(1.0 / n.x, 1.0 / n.y, 1.0 / n.z);
+            let (min, max) = (a.min(b), a.max(b));
+            prop_assert_eq!(
+                segment_box(o, inv, min, max, t0, t0 + len),
+                segment_box_axes(o, inv, min, max, t0, t0 + len)
+            );
+        }
     }
 }
