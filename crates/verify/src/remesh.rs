@@ -11,8 +11,9 @@
 //! * the face's interior gets a triangular lattice of spacing `LATTICE · s`, rows parallel to
 //!   its first edge from its first corner, kept half a spacing from the sides;
 //! * boundary and lattice points are joined by a constrained Delaunay triangulation of the
-//!   face's plane ([`crate::polycdt`]; spade where that cannot place a point, with the same
-//!   result wherever the triangulation is unique).
+//!   face's plane (the crate's own small one, Lawson flips on exact predicates; spade
+//!   where that cannot place a point, with the same result wherever the triangulation is
+//!   unique).
 //!
 //! Inner edges still longer than `s` (where the lattice meets the boundary) get their
 //! midpoints inserted until none is left; whatever is left longer (faces only partly in the
