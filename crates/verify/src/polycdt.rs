@@ -93,7 +93,7 @@ impl PolyCdt {
                     cdt.hull_edge(i as u32 - 1, end)?
                 };
                 let t1 = cdt.tris.len() as u32;
-                cdt.split_edge(t, k, i as u32);
+                cdt.split_edge(t, k, i as u32)?;
                 cdt.legalize();
                 // The split's second triangle held the new hull edge from the new point.
                 at = (0..3)
@@ -207,7 +207,7 @@ impl PolyCdt {
             }
             match on {
                 None => self.split_triangle(t, i),
-                Some(k) if self.adj[t as usize][k] != NONE => self.split_edge(t, k, i),
+                Some(k) if self.adj[t as usize][k] != NONE => self.split_edge(t, k, i)?,
                 Some(_) => return None,
             }
             self.legalize();
@@ -233,8 +233,9 @@ impl PolyCdt {
     }
 
     /// Splits edge `k` of triangle `t` at the new point `p` on it (and the triangle across
-    /// it, if any).
-    fn split_edge(&mut self, t: u32, k: usize, p: u32) {
+    /// it, if any). `None`, changing nothing, when the neighbours do not agree on the edge
+    /// (a broken triangulation: never expected, refused rather than a panic).
+    fn split_edge(&mut self, t: u32, k: usize, p: u32) -> Option<()> {
         let v = self.tris[t as usize];
         let nb = self.adj[t as usize];
         let (a, b, c) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
@@ -243,18 +244,22 @@ impl PolyCdt {
         let t1 = self.tris.len() as u32;
         let u1 = t1 + 1;
         let has_u = u != NONE;
+        // The triangle across: the edge's place in it.
+        let j = if has_u {
+            let w = self.tris[u as usize];
+            Some((0..3).find(|&j| w[j] == b && w[(j + 1) % 3] == a)?)
+        } else {
+            None
+        };
         self.tris[t as usize] = [a, p, c];
         self.adj[t as usize] = [if has_u { u1 } else { NONE }, t1, nca];
         self.tris.push([p, b, c]);
         self.adj.push([if has_u { u } else { NONE }, nbc, t]);
         self.repoint(nbc, t, t1);
         self.stack.extend([(t, 2), (t1, 1)]);
-        if has_u {
+        if let Some(j) = j {
             let w = self.tris[u as usize];
             let wn = self.adj[u as usize];
-            let j = (0..3)
-                .find(|&j| w[j] == b && w[(j + 1) % 3] == a)
-                .expect("neighbours share the edge");
             let d = w[(j + 2) % 3];
             let (nad, ndb) = (wn[(j + 1) % 3], wn[(j + 2) % 3]);
             self.tris[u as usize] = [b, p, d];
@@ -265,6 +270,7 @@ impl PolyCdt {
             self.stack.extend([(u, 2), (u1, 1)]);
         }
         self.last = t;
+        Some(())
     }
 
     /// In triangle `n` (if any), the neighbour `old` becomes `new`.
