@@ -169,11 +169,11 @@ fn slab_interval(line: &Line, k: DVec3, z0: f64, z1: f64, r: f64) -> Option<(f64
     Some((a.min(b), a.max(b)))
 }
 
-/// Whether the segment `lo..hi` of `line` passes within `rr` of the segment `c0 c1` by the
-/// bounding sphere of that segment's capsule (a cheap necessary test).
-fn near_capsule(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) -> bool {
-    let m = 0.5 * (c0 + c1);
-    let rho = 0.5 * c0.distance(c1) + rr;
+/// Whether the segment `lo..hi` of `line` passes within `rr` of a segment by the bounding
+/// sphere of that segment's capsule (a cheap necessary test); `(m, half)` is the segment's
+/// middle and half its length ([`Extras::mids`]).
+fn near_capsule(line: &Line, hi: f64, (m, half): (DVec3, f64), rr: f64) -> bool {
+    let rho = half + rr;
     let t = (m - line.o).dot(line.n).clamp(line.lo, hi);
     (line.o + t * line.n).distance_squared(m) <= rho * rho * (1.0 + 1e-12)
 }
@@ -494,6 +494,9 @@ struct Extras {
     items: Vec<(u8, u32, DVec3, DVec3)>,
     /// Per item: its box (mm).
     bounds: Vec<(DVec3, DVec3)>,
+    /// Per item: the middle of its centres' segment and half that segment's length (mm),
+    /// for [`near_capsule`].
+    mids: Vec<(DVec3, f64)>,
     /// Nodes: box and, for a leaf, the item range; inner nodes point at two children.
     nodes: Vec<(DVec3, DVec3, u32, u32)>,
     radius: f64,
@@ -678,9 +681,14 @@ impl Extras {
         order.sort_unstable();
         let bounds: Vec<_> = order.iter().map(|&(_, i)| bounds[i]).collect();
         let items: Vec<_> = order.iter().map(|&(_, i)| items[i]).collect();
+        let mids = items
+            .iter()
+            .map(|&(_, _, c0, c1)| (0.5 * (c0 + c1), 0.5 * c0.distance(c1)))
+            .collect();
         let mut e = Extras {
             items,
             bounds,
+            mids,
             nodes: Vec::new(),
             radius,
         };
@@ -1245,7 +1253,7 @@ fn measure_vectors(
             queue.clear();
             let f = |ci: usize, hi: f64| {
                 let (_, mv, c0, c1) = volumes.items[ci];
-                if !near_capsule(&line, hi, c0, c1, rr) {
+                if !near_capsule(&line, hi, volumes.mids[ci], rr) {
                     return hi;
                 }
                 let k = axis_of(mv);
@@ -1288,8 +1296,7 @@ fn measure_vectors(
             }
         } else {
             let f = |ci: usize, hi: f64| {
-                let (_, _, c0, c1) = volumes.items[ci];
-                if near_capsule(&line, hi, c0, c1, rr) {
+                if near_capsule(&line, hi, volumes.mids[ci], rr) {
                     try_move(ci, &mut found);
                 }
                 found.map_or(hi, |(f, _)| f.s.min(hi))

@@ -46,7 +46,9 @@ impl PolyCdt {
         Some(cdt)
     }
 
-    /// [`PolyCdt::new`] in place, reusing this triangulation's memory.
+    /// Makes this the triangulation of the polygon `boundary` (as for `new`: corners at
+    /// `corners`, the first 0, room for `inner` more points), reusing its memory. `None`
+    /// when the corners do not turn counter-clockwise or a point cannot be placed.
     pub(crate) fn reset(
         &mut self,
         boundary: &[[f64; 2]],
