@@ -311,7 +311,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn v3() -> impl Strategy<Value = DVec3> {
-        (-4.0..4.0f64, -4.0..4.0f64, -4.0..4.0f64).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+        crate::testkit::v3(4.0)
     }
 
     proptest! {

@@ -19,6 +19,8 @@ pub mod refine;
 pub mod remesh;
 pub mod report;
 pub mod sweep;
+#[cfg(test)]
+mod testkit;
 pub mod testpaths;
 pub mod zmap;
 

@@ -328,20 +328,8 @@ impl PolyCdt {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::testkit::Lcg;
     use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
-
-    /// Deterministic pseudo-random numbers in [0, 1).
-    struct Lcg(u64);
-
-    impl Lcg {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
 
     /// A random triangle's polygon (sides divided into 1–5 parts) and random points inside.
     fn case(rng: &mut Lcg) -> (Vec<[f64; 2]>, [usize; 3], Vec<[f64; 2]>) {

@@ -80,7 +80,7 @@ mod tests {
     }
 
     fn v3() -> impl Strategy<Value = DVec3> {
-        (-5.0..5.0f64, -5.0..5.0f64, -5.0..5.0f64).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+        crate::testkit::v3(5.0)
     }
 
     /// A direction, sometimes along an axis or in a coordinate plane (zero components).

@@ -247,6 +247,61 @@ impl Frame {
     }
 }
 
+/// Which inner edges of a face's triangulation get their midpoint: those longer than `s`
+/// whose midpoint lies strictly inside the face (in its frame) and `near` the region.
+struct Midpoints<'a> {
+    frame: &'a Frame,
+    b2: [f64; 2],
+    c2: [f64; 2],
+    s: f64,
+    near: &'a dyn Fn(DVec3) -> bool,
+}
+
+impl<'a> Midpoints<'a> {
+    fn new(frame: &'a Frame, s: f64, near: &'a dyn Fn(DVec3) -> bool) -> Midpoints<'a> {
+        let (b2, c2) = (frame.to2(frame.b), frame.to2(frame.c));
+        Midpoints {
+            frame,
+            b2: [b2.x, b2.y],
+            c2: [c2.x, c2.y],
+            s,
+            near,
+        }
+    }
+
+    /// The midpoint of the inner edge `p`–`q` (frame coordinates) if it gets one.
+    fn of(&self, p: [f64; 2], q: [f64; 2]) -> Option<[f64; 2]> {
+        let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+        let m = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
+        (dx * dx + dy * dy > self.s * self.s && self.inside(m) && (self.near)(self.at(m)))
+            .then_some(m)
+    }
+
+    /// Strictly inside the face, by a margin of 1e-9·s² in the corner cross products.
+    fn inside(&self, p: [f64; 2]) -> bool {
+        let cross = |o: [f64; 2], q: [f64; 2]| {
+            (q[0] - o[0]) * (p[1] - o[1]) - (q[1] - o[1]) * (p[0] - o[0])
+        };
+        let tol = 1e-9 * self.s * self.s;
+        let (b2, c2) = (self.b2, self.c2);
+        cross([0.0, 0.0], b2) > tol && cross(b2, c2) > tol && cross(c2, [0.0, 0.0]) > tol
+    }
+
+    /// The frame point `m` on the face (mm).
+    fn at(&self, m: [f64; 2]) -> DVec3 {
+        self.frame.a + m[0] * self.frame.x + m[1] * self.frame.y
+    }
+}
+
+/// A face's local vertex `i` of a triangulation whose first `ids.len()` points are its
+/// boundary (global `ids`) and the rest its lattice and midpoints.
+fn local(ids: &[u32], i: usize) -> Local {
+    match ids.get(i) {
+        Some(&g) => Local::Global(g),
+        None => Local::Lattice((i - ids.len()) as u32),
+    }
+}
+
 /// Calls `f(px, py, p)` for each point of the face's lattice of spacing `h` (rows parallel
 /// to its first edge from its first corner, √3/2·h apart, odd rows shifted by h/2, kept h/2
 /// from the sides) for which `near(p)` holds, at most `limit` of them; returns how many.
@@ -352,7 +407,6 @@ fn face_mesh_own(
     near: &dyn Fn(DVec3) -> bool,
 ) -> Option<FaceMesh> {
     let frame = Frame::new(pos0, t)?;
-    let (a, x, y) = (frame.a, frame.x, frame.y);
     let ids = boundary(divided, t);
     let nb = ids.len();
     let corner = |c: u32| ids.iter().position(|&i| i == c);
@@ -383,45 +437,26 @@ fn face_mesh_own(
     }
     // Inner edges still longer than `s` get their midpoints (see `face_mesh_spade`).
     if h > 0.0 {
-        let (b2, c2) = (frame.to2(frame.b), frame.to2(frame.c));
-        let inside = |p: [f64; 2]| {
-            let cross = |o: [f64; 2], q: [f64; 2]| {
-                (q[0] - o[0]) * (p[1] - o[1]) - (q[1] - o[1]) * (p[0] - o[0])
-            };
-            let tol = 1e-9 * s * s;
-            let (b2, c2) = ([b2.x, b2.y], [c2.x, c2.y]);
-            cross([0.0, 0.0], b2) > tol && cross(b2, c2) > tol && cross(c2, [0.0, 0.0]) > tol
-        };
+        let rule = Midpoints::new(&frame, s, near);
         for _ in 0..MAX_ROUNDS {
             mids.clear();
-            mids.extend(cdt.inner_edges().filter_map(|(p, q, t)| {
-                let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
-                let m = [0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1])];
-                (dx * dx + dy * dy > s * s && inside(m) && near(a + m[0] * x + m[1] * y))
-                    .then_some((m, t))
-            }));
+            mids.extend(
+                cdt.inner_edges()
+                    .filter_map(|(p, q, t)| rule.of(p, q).map(|m| (m, t))),
+            );
             if mids.is_empty() {
                 break;
             }
             for &(m, t) in mids.iter() {
                 cdt.insert_near(m, t)?;
-                lattice.push(a + m[0] * x + m[1] * y);
+                lattice.push(rule.at(m));
             }
         }
     }
     let tris: Vec<[Local; 3]> = cdt
         .triangles()
         .iter()
-        .map(|v| {
-            v.map(|i| {
-                let i = i as usize;
-                if i < nb {
-                    Local::Global(ids[i])
-                } else {
-                    Local::Lattice((i - nb) as u32)
-                }
-            })
-        })
+        .map(|v| v.map(|i| local(&ids, i as usize)))
         .collect();
     if tris.len() != nb + 2 * lattice.len() - 2 || cdt.num_points() != nb + lattice.len() {
         return None;
@@ -440,11 +475,9 @@ fn face_mesh_spade(
     near: &dyn Fn(DVec3) -> bool,
 ) -> Option<FaceMesh> {
     let frame = Frame::new(pos0, t)?;
-    let (a, b, c, x, y) = (frame.a, frame.b, frame.c, frame.x, frame.y);
-    let to2 = |p: DVec3| frame.to2(p);
     // Boundary, counter-clockwise in the face's frame.
     let ids = boundary(divided, t);
-    let mut pts: Vec<Point2<f64>> = ids.iter().map(|&i| to2(pos[i as usize])).collect();
+    let mut pts: Vec<Point2<f64>> = ids.iter().map(|&i| frame.to2(pos[i as usize])).collect();
     let nb = pts.len();
     // The lattice (see `lattice_points`), then any midpoints added below.
     let mut lattice = Vec::new();
@@ -467,26 +500,14 @@ fn face_mesh_spade(
     // midpoints, strictly inside the face, until none is left: the boundary, whose parts are
     // at most `s`, is never touched, so the faces around stay conforming.
     if h > 0.0 {
-        let (b2, c2) = (to2(b), to2(c));
-        let inside = |p: Point2<f64>| {
-            let cross = |o: Point2<f64>, q: Point2<f64>| {
-                (q.x - o.x) * (p.y - o.y) - (q.y - o.y) * (p.x - o.x)
-            };
-            let tol = 1e-9 * s * s;
-            cross(Point2::new(0.0, 0.0), b2) > tol
-                && cross(b2, c2) > tol
-                && cross(c2, Point2::new(0.0, 0.0)) > tol
-        };
+        let rule = Midpoints::new(&frame, s, near);
         for _ in 0..MAX_ROUNDS {
-            let mids: Vec<Point2<f64>> = cdt
+            let mids: Vec<[f64; 2]> = cdt
                 .undirected_edges()
                 .filter(|e| !e.is_constraint_edge())
                 .filter_map(|e| {
                     let [p, q] = e.positions();
-                    let (dx, dy) = (q.x - p.x, q.y - p.y);
-                    let m = Point2::new(0.5 * (p.x + q.x), 0.5 * (p.y + q.y));
-                    (dx * dx + dy * dy > s * s && inside(m) && near(a + m.x * x + m.y * y))
-                        .then_some(m)
+                    rule.of([p.x, p.y], [q.x, q.y])
                 })
                 .collect();
             if mids.is_empty() {
@@ -494,11 +515,11 @@ fn face_mesh_spade(
             }
             for m in mids {
                 let before = cdt.num_vertices();
-                cdt.insert(m).ok()?;
+                cdt.insert(Point2::new(m[0], m[1])).ok()?;
                 if cdt.num_vertices() != before + 1 {
                     return None;
                 }
-                lattice.push(a + m.x * x + m.y * y);
+                lattice.push(rule.at(m));
             }
         }
     }
@@ -533,16 +554,7 @@ fn face_mesh_spade(
     let tris: Vec<[Local; 3]> = cdt
         .inner_faces()
         .filter(|f| !outside[f.fix().index()])
-        .map(|f| {
-            f.vertices().map(|v| {
-                let i = v.fix().index();
-                if i < nb {
-                    Local::Global(ids[i])
-                } else {
-                    Local::Lattice((i - nb) as u32)
-                }
-            })
-        })
+        .map(|f| f.vertices().map(|v| local(&ids, v.fix().index())))
         .collect();
     // A triangulation of a polygon with `nb` boundary and `l` inner points has nb + 2l − 2
     // triangles.
@@ -597,13 +609,8 @@ mod tests {
     /// random faces from slivers to faces some fifty times the edge bound across.
     #[test]
     fn own_triangulation_matches_spade() {
-        let mut seed = 11u64;
-        let mut rnd = || {
-            seed = seed
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = crate::testkit::Lcg(11);
+        let mut rnd = || rng.next();
         let s = 0.3;
         let mut faces = 0;
         for _ in 0..300 {
