@@ -223,85 +223,59 @@ fn sphere_interval(o: DVec3, n: DVec3, c: DVec3, r: f64) -> Option<(f64, f64)> {
     quadratic_roots(1.0, m.dot(n), m.length_squared() - r * r)
 }
 
-/// Relative widening of [`Across::misses_hull`]'s cylinder and slab: far beyond the
+/// Relative widening of [`misses_capsule_hull`]'s cylinder and slab: far beyond the
 /// rounding of the capsule's own quadratics, so no segment it turns away could have been
 /// found entering the capsule by them.
 const HULL_WIDEN: f64 = 1e-9;
 
-/// A line's parts across a capsule's axis `c0 → c1` (of non-zero length), which both the
-/// hull rejection and the capsule's cylinder need.
-struct Across {
-    /// `c1 − c0`, its squared length, its length and direction.
-    d: DVec3,
-    dd: f64,
-    dl: f64,
-    dh: DVec3,
-    /// `o − c0` (the line's origin from the axis' start).
-    m: DVec3,
-    /// The cylinder's quadratic `qa·s² + 2·qb·s + (mp2 − radius²)`: `|m⊥ + s·n⊥|²`.
-    qa: f64,
-    qb: f64,
-    mp2: f64,
-}
-
-impl Across {
-    fn new(line: &Line, c0: DVec3, c1: DVec3) -> Option<Across> {
-        let d = c1 - c0;
-        let dd = d.length_squared();
-        if dd == 0.0 {
-            return None;
-        }
-        let dl = dd.sqrt();
-        let dh = d / dl;
-        let m = line.o - c0;
-        let mp = m - m.dot(dh) * dh;
-        let np = line.n - line.n.dot(dh) * dh;
-        Some(Across {
-            d,
-            dd,
-            dl,
-            dh,
-            m,
-            qa: np.length_squared(),
-            qb: mp.dot(np),
-            mp2: mp.length_squared(),
-        })
+/// Whether the segment `lo..hi` of `line` surely misses the capsule of radius `r` about
+/// `c0 c1`: it misses the infinite cylinder of radius `r` about the centres' line, or the
+/// slab of the capsule across that line, both widened by [`HULL_WIDEN`]. One quadratic, for
+/// the many segments that pass near a move's box but not through its capsule. `false` means
+/// nothing (the capsule itself is searched). The cylinder's parts are computed again by the
+/// capsule's own search when this passes: handing them over in a struct cost more
+/// instructions than recomputing them (callgrind, dome ball: 795 M against 874–908 M in
+/// `capsule_entry`), as most segments leave by the slab first.
+fn misses_capsule_hull(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> bool {
+    let d = c1 - c0;
+    let dd = d.length_squared();
+    if dd == 0.0 {
+        return false;
     }
-
-    /// Whether the segment `lo..hi` of `line` surely misses the capsule of radius `r`: it
-    /// misses the infinite cylinder of radius `r` about the centres' line, or the slab of the
-    /// capsule across that line, both widened by [`HULL_WIDEN`]. One quadratic, for the many
-    /// segments that pass near a move's box but not through its capsule. `false` means
-    /// nothing (the capsule itself is searched).
-    fn misses_hull(&self, line: &Line, r: f64) -> bool {
-        let dl = self.dl;
-        let w = r * (1.0 + HULL_WIDEN) + HULL_WIDEN * dl;
-        // Slab −w ≤ (x − c0)·d/|d| ≤ |d| + w: its interval in s.
-        let (p0, pn) = (self.m.dot(self.d) / dl, line.n.dot(self.d) / dl);
-        let (mut lo, mut hi) = (line.lo, line.hi);
-        if pn != 0.0 {
-            let (ta, tb) = ((-w - p0) / pn, (dl + w - p0) / pn);
-            lo = lo.max(ta.min(tb));
-            hi = hi.min(ta.max(tb));
-        } else if p0 < -w || p0 > dl + w {
-            return true;
-        }
-        if lo > hi {
-            return true;
-        }
-        // Cylinder: |m⊥ + s·n⊥|² ≤ w².
-        let (qa, qb, qc) = (self.qa, self.qb, self.mp2 - w * w);
-        if qa <= 1e-300 {
-            return qc > 0.0;
-        }
-        let disc = qb * qb - qa * qc;
-        if disc < 0.0 {
-            return true;
-        }
-        let sq = disc.sqrt();
-        let (c_in, c_out) = ((-qb - sq) / qa, (-qb + sq) / qa);
-        c_out < lo || c_in > hi
+    let (o, n) = (line.o, line.n);
+    let dl = dd.sqrt();
+    let w = r * (1.0 + HULL_WIDEN) + HULL_WIDEN * dl;
+    // Slab −w ≤ (x − c0)·d/|d| ≤ |d| + w: its interval in s.
+    let (p0, pn) = ((o - c0).dot(d) / dl, n.dot(d) / dl);
+    let (mut lo, mut hi) = (line.lo, line.hi);
+    if pn != 0.0 {
+        let (ta, tb) = ((-w - p0) / pn, (dl + w - p0) / pn);
+        lo = lo.max(ta.min(tb));
+        hi = hi.min(ta.max(tb));
+    } else if p0 < -w || p0 > dl + w {
+        return true;
     }
+    if lo > hi {
+        return true;
+    }
+    // Cylinder: |m⊥ + s·n⊥|² ≤ w².
+    let dh = d / dl;
+    let m = o - c0;
+    let mp = m - m.dot(dh) * dh;
+    let np = n - n.dot(dh) * dh;
+    let qa = np.length_squared();
+    let qb = mp.dot(np);
+    let qc = mp.length_squared() - w * w;
+    if qa <= 1e-300 {
+        return qc > 0.0;
+    }
+    let disc = qb * qb - qa * qc;
+    if disc < 0.0 {
+        return true;
+    }
+    let sq = disc.sqrt();
+    let (c_in, c_out) = ((-qb - sq) / qa, (-qb + sq) / qa);
+    c_out < lo || c_in > hi
 }
 
 /// First entry of `line` into the capsule of radius `r` about the segment `c0 c1` (a ball
@@ -313,8 +287,7 @@ pub fn capsule_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry>
 /// [`capsule_entry`], with (`quick`) or without the hull rejection first.
 fn capsule_entry_with(line: &Line, c0: DVec3, c1: DVec3, r: f64, quick: bool) -> Option<Entry> {
     let (o, n) = (line.o, line.n);
-    let across = Across::new(line, c0, c1);
-    if quick && across.as_ref().is_some_and(|a| a.misses_hull(line, r)) {
+    if quick && misses_capsule_hull(line, c0, c1, r) {
         return None;
     }
     let mut best: Option<(f64, DVec3)> = None;
@@ -333,19 +306,17 @@ fn capsule_entry_with(line: &Line, c0: DVec3, c1: DVec3, r: f64, quick: bool) ->
             take(a, b, &|s| ((o + s * n - c) / r).normalize_or(-n));
         }
     }
-    if let Some(Across {
-        d,
-        dd,
-        dh,
-        m,
-        qa,
-        qb,
-        mp2,
-        ..
-    }) = across
-    {
+    let d = c1 - c0;
+    let dd = d.length_squared();
+    if dd > 0.0 {
+        let dh = d / dd.sqrt();
         // Perpendicular parts.
-        let qc = mp2 - r * r;
+        let m = o - c0;
+        let mp = m - m.dot(dh) * dh;
+        let np = n - n.dot(dh) * dh;
+        let qa = np.length_squared();
+        let qb = mp.dot(np);
+        let qc = mp.length_squared() - r * r;
         let cyl = if qa > 1e-300 {
             let disc = qb * qb - qa * qc;
             (disc >= 0.0).then(|| {
