@@ -818,6 +818,15 @@ impl Extras {
         room
     }
 
+    /// Calls `f` for each of the items `among`, in order, with no test of its own: for
+    /// visitors that test each item at least as tightly as its box (`f` returns the new
+    /// upper end of the segment, as for [`Extras::visit`]).
+    fn visit_listed(among: &[u32], mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
+        for &ci in among {
+            hi = f(ci as usize, hi);
+        }
+    }
+
     /// [`Extras::visit`] over the items `among` only (ascending, and holding every item
     /// whose box the segment meets, as [`Extras::gather`] returns for a box holding the
     /// segment): the same calls of `f`, in the same order.
@@ -1267,7 +1276,7 @@ fn measure_vectors(
                 hi
             };
             match among {
-                Some((vols, _)) => volumes.visit_among(vols, &line, hi0, f),
+                Some((vols, _)) => Extras::visit_listed(vols, hi0, f),
                 None => volumes.visit(&line, hi0, f),
             }
             queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.2.cmp(&q.2)));
@@ -1302,7 +1311,7 @@ fn measure_vectors(
                 found.map_or(hi, |(f, _)| f.s.min(hi))
             };
             match among {
-                Some((vols, _)) => volumes.visit_among(vols, &line, hi0, f),
+                Some((vols, _)) => Extras::visit_listed(vols, hi0, f),
                 None => volumes.visit(&line, hi0, f),
             }
         }
