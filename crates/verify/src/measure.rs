@@ -819,7 +819,8 @@ impl Extras {
     }
 
     /// Calls `f` for each of the items `among`, in order, with no test of its own: for
-    /// visitors that test each item at least as tightly as its box (`f` returns the new
+    /// visitors that test each item themselves before its exact entry, where a box test in
+    /// front (a necessary condition too) costs more than it saves (`f` returns the new
     /// upper end of the segment, as for [`Extras::visit`]).
     fn visit_listed(among: &[u32], mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
         for &ci in among {
@@ -1055,7 +1056,6 @@ fn measure_vectors(
     progress: Option<Progress<'_>>,
 ) -> Measurement {
     let exact = surface == SurfaceModel::Exact;
-    let vectors = vectors.to_vec();
     let delta = window(models);
     // Exact: caps are tested exactly below, the triangles locate strips only, and a line
     // passing just outside a triangle counts: the true sheet bulges past its chords by up to
@@ -1612,8 +1612,17 @@ fn measure_vectors(
             (None, None) => (dev(None, None), 0.0, None, None, stats),
         }
     };
-    // In chunks, for progress; each vector's answer depends on the vector alone.
-    let mut per: Vec<PerVector> = Vec::with_capacity(vectors.len());
+    // In chunks, for progress; each vector's answer depends on the vector alone. Kept
+    // compact (the vector's position and normal are put back at the end) and the counts
+    // summed per tile: these records are copied and placed, and at several hundred
+    // thousand vectors their size is felt.
+    let mut readings: Vec<Reading> = Vec::with_capacity(vectors.len());
+    let mut stats = [0usize; 5];
+    let add = |sum: &mut [usize; 5], s: &[usize; 5]| {
+        for (a, b) in sum.iter_mut().zip(s) {
+            *a += b;
+        }
+    };
     for chunk in vectors.chunks(MEASURE_CHUNK) {
         if direct {
             // In tiles of neighbouring vectors (Morton order of their origins), each seeded
@@ -1622,12 +1631,20 @@ fn measure_vectors(
             let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
             let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
             order.sort_unstable();
-            let done: Vec<(u32, PerVector)> = order
+            let done: Vec<TileReadings> = order
                 .par_chunks(DIRECT_TILE)
-                .flat_map_iter(|tile| {
+                .map(|tile| {
                     let (mut seed, mut queue) = (None, Vec::new());
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
                     let mut out = Vec::with_capacity(tile.len());
+                    let mut sum = [0usize; 5];
+                    let mut keep = |i: u32, r: PerVector, seed: &mut Option<_>| {
+                        if let Some(mv) = r.0.source_move {
+                            *seed = seed_of(mv);
+                        }
+                        add(&mut sum, &r.4);
+                        out.push((i, Reading::of(&r)));
+                    };
                     for group in tile.chunks(DIRECT_GROUP) {
                         // A vector's entry into its seed's move bounds its search; a vector
                         // its seed misses is searched in the trees, and seeds the next.
@@ -1639,10 +1656,7 @@ fn measure_vectors(
                                 Some(b) => pending.push((i, b)),
                                 None => {
                                     let r = direct_one(v, (seed.is_some(), None), &mut queue, None);
-                                    if let Some(mv) = r.0.source_move {
-                                        seed = seed_of(mv);
-                                    }
-                                    out.push((i, r));
+                                    keep(i, r, &mut seed);
                                 }
                             }
                         }
@@ -1671,63 +1685,92 @@ fn measure_vectors(
                             let among = gathered.then_some((&vols[..], &cols[..]));
                             let r =
                                 direct_one(&chunk[i as usize], (true, Some(b)), &mut queue, among);
-                            if let Some(mv) = r.0.source_move {
-                                seed = seed_of(mv);
-                            }
-                            out.push((i, r));
+                            keep(i, r, &mut seed);
                         }
                     }
-                    out
+                    (out, sum)
                 })
                 .collect();
-            // Back in the vectors' order: each index once, placed (no sort of these
-            // large records).
-            let mut placed: Vec<Option<PerVector>> = Vec::with_capacity(done.len());
-            placed.resize_with(done.len(), || None);
-            for (i, r) in done {
-                placed[i as usize] = Some(r);
+            // Back in the vectors' order: each index once, placed.
+            let mut placed: Vec<Option<Reading>> = vec![None; chunk.len()];
+            for (out, sum) in done {
+                add(&mut stats, &sum);
+                for (i, r) in out {
+                    placed[i as usize] = Some(r);
+                }
             }
-            per.extend(
+            readings.extend(
                 placed
                     .into_iter()
                     .map(|r| r.expect("every vector of the chunk measured once")),
             );
         } else {
             let found = find(chunk);
-            per.par_extend(chunk.par_iter().zip(found.par_iter()).map(one));
+            let per: Vec<PerVector> = chunk.par_iter().zip(found.par_iter()).map(one).collect();
+            for r in &per {
+                add(&mut stats, &r.4);
+                readings.push(Reading::of(r));
+            }
         }
         if let Some(p) = progress {
-            p(per.len(), vectors.len());
+            p(readings.len(), vectors.len());
         }
     }
-    let from_start = per
-        .iter()
-        .zip(&vectors)
-        .map(|(p, v)| p.0.signed_mm == Some(v.lo))
-        .collect();
-    let mut stats = MeasureStats::default();
-    let mut deviations = Vec::with_capacity(per.len());
-    let mut facings = Vec::with_capacity(per.len());
-    let mut linear_mm = Vec::with_capacity(per.len());
-    let mut source = Vec::with_capacity(per.len());
-    for (d, fc, l, src, s) in per {
-        deviations.push(d);
-        facings.push(fc);
-        linear_mm.push(l);
-        source.push(src);
-        stats.crossed += s[0];
-        stats.refinements += s[1];
-        stats.refined += s[2];
-        stats.kept_linear += s[3];
-        stats.overflow += s[4];
+    let mut deviations = Vec::with_capacity(readings.len());
+    let mut facing = Vec::with_capacity(readings.len());
+    let mut linear_mm = Vec::with_capacity(readings.len());
+    let mut source = Vec::with_capacity(readings.len());
+    let mut from_start = Vec::with_capacity(readings.len());
+    for (r, v) in readings.iter().zip(vectors) {
+        deviations.push(Deviation {
+            position: v.o,
+            normal: v.n,
+            signed_mm: r.signed_mm,
+            source_move: r.source_move,
+        });
+        facing.push(r.facing);
+        linear_mm.push(r.linear_mm);
+        source.push(r.source);
+        from_start.push(r.signed_mm == Some(v.lo));
     }
     Measurement {
         deviations,
-        facing: facings,
+        facing,
         linear_mm,
         source,
         from_start,
-        stats,
+        stats: MeasureStats {
+            crossed: stats[0],
+            refinements: stats[1],
+            refined: stats[2],
+            kept_linear: stats[3],
+            overflow: stats[4],
+        },
+    }
+}
+
+/// A tile's readings (by vector index in its chunk) and its summed counts.
+type TileReadings = (Vec<(u32, Reading)>, [usize; 5]);
+
+/// One vector's answer as kept between its search and the [`Measurement`] (see there).
+#[derive(Debug, Clone, Copy)]
+struct Reading {
+    signed_mm: Option<f64>,
+    source_move: Option<u32>,
+    facing: f64,
+    linear_mm: Option<f64>,
+    source: Option<Source>,
+}
+
+impl Reading {
+    fn of(r: &(Deviation, f64, Option<f64>, Option<Source>, [usize; 5])) -> Reading {
+        Reading {
+            signed_mm: r.0.signed_mm,
+            source_move: r.0.source_move,
+            facing: r.1,
+            linear_mm: r.2,
+            source: r.3,
+        }
     }
 }
 
