@@ -138,9 +138,14 @@ pub(crate) fn remesh(
             return Err(c);
         }
     }
+    // Faces differ in cost by orders of magnitude (a large plate face holds thousands of
+    // lattice points, a dome's sliver a handful) and neighbours alike: in pieces of at most
+    // 64 faces, so that the threads can even out the work (split only as far as the default
+    // allows, the dome's face map ran on one thread for 80 % of its time).
     let meshes: Vec<Option<FaceMesh>> = tris0
         .par_iter()
         .zip(&active)
+        .with_max_len(64)
         .map_init(Scratch::default, |scratch, (t, &act)| {
             let touched = (0..3)
                 .any(|k| divided.contains_key(&crate::refine::edge_key(t[k], t[(k + 1) % 3])));
