@@ -1633,6 +1633,10 @@ fn measure_vectors(
             order.sort_unstable();
             let done: Vec<TileReadings> = order
                 .par_chunks(DIRECT_TILE)
+                // One tile per piece: tiles differ in cost with the part's shape (a flat
+                // floor, a steep wall), and rayon's default split can leave a whole half
+                // of them on one thread (the dome's measure scaled 1.5x to 2 threads).
+                .with_max_len(1)
                 .map(|tile| {
                     let (mut seed, mut queue) = (None, Vec::new());
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());

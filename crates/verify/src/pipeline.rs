@@ -271,40 +271,48 @@ fn crease_depths(
     let crease = CREASE_DEG.to_radians().cos();
     let sharp = |i: usize| cos_min[i] < crease || on_rim[i];
     // Each vertex on its own: in parallel.
-    devs.par_iter_mut().enumerate().for_each(|(i, d)| {
-        let Some(s) = d.signed_mm.filter(|s| *s < 0.0) else {
-            return;
-        };
-        // A smooth vertex whose entry point lies nearer to another part of the design than
-        // to its own face sees a crease's glancing geometry too: its vector runs under an
-        // edge within that distance.
-        let entry = refined.positions[i] + s * refined.normals[i];
-        if !sharp(i) && !unoriented[i] && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none() {
-            return;
-        }
-        let first_order = s * m.facing[i].abs().min(1.0);
-        let depth = match (exact, m.source[i]) {
-            // Read at its start, the vector says only "at least this deep"; with the
-            // material side unknown it says nothing: the vertex's depth inside the whole
-            // cutter, the column included (there a lower bound).
-            (Some((models, path)), Some(src)) if m.from_start[i] || unoriented[i] => {
-                measure::cutter_depth_inside(models, path, src, refined.positions[i])
+    // In pieces of at most 1024 vertices: the work lies on the creases and rims only, and
+    // rayon's default split can leave most of it on one thread.
+    devs.par_iter_mut()
+        .enumerate()
+        .with_max_len(1024)
+        .for_each(|(i, d)| {
+            let Some(s) = d.signed_mm.filter(|s| *s < 0.0) else {
+                return;
+            };
+            // A smooth vertex whose entry point lies nearer to another part of the design than
+            // to its own face sees a crease's glancing geometry too: its vector runs under an
+            // edge within that distance.
+            let entry = refined.positions[i] + s * refined.normals[i];
+            if !sharp(i)
+                && !unoriented[i]
+                && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none()
+            {
+                return;
             }
-            (Some((models, path)), Some(src)) => {
-                measure::depth_inside(models, path, src, refined.positions[i])
-            }
-            _ => 0.0,
-        };
-        d.signed_mm = Some(if depth > 0.0 {
-            -depth
-        } else if unoriented[i] && exact.is_some() {
-            // The vertex is not inside the volume: with the material side unknown, the
-            // reading along the normal is not evidence of a gouge.
-            0.0
-        } else {
-            first_order
+            let first_order = s * m.facing[i].abs().min(1.0);
+            let depth = match (exact, m.source[i]) {
+                // Read at its start, the vector says only "at least this deep"; with the
+                // material side unknown it says nothing: the vertex's depth inside the whole
+                // cutter, the column included (there a lower bound).
+                (Some((models, path)), Some(src)) if m.from_start[i] || unoriented[i] => {
+                    measure::cutter_depth_inside(models, path, src, refined.positions[i])
+                }
+                (Some((models, path)), Some(src)) => {
+                    measure::depth_inside(models, path, src, refined.positions[i])
+                }
+                _ => 0.0,
+            };
+            d.signed_mm = Some(if depth > 0.0 {
+                -depth
+            } else if unoriented[i] && exact.is_some() {
+                // The vertex is not inside the volume: with the material side unknown, the
+                // reading along the normal is not evidence of a gouge.
+                0.0
+            } else {
+                first_order
+            });
         });
-    });
 }
 
 /// Verifies `toolpath` (tool-tip poses) cut by `cutter` against `part`.
