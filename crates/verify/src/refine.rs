@@ -583,6 +583,8 @@ fn vertex_normals(
     }
     let blocks: Vec<(Vec<DVec3>, Vec<u32>)> = slices
         .into_par_iter()
+        // One block per piece: the work lies on the design's edges, unevenly.
+        .with_max_len(1)
         .map(|(b, e, slot)| {
             let (mut normals, mut count) = (Vec::new(), Vec::with_capacity(e - b));
             // Each corner's angle, computed once per vertex (not once per pair of corners).
