@@ -192,9 +192,20 @@ const DIRECT_TILE: usize = 256;
 /// `measure_vectors`).
 const DIRECT_GROUP: usize = 16;
 
-/// The most moves (and, counted apart, columns) a group's vectors search in a list in place
-/// of the trees; beyond it the trees, which prune by each vector's own segment, are faster.
-const DIRECT_CANDIDATES: usize = 256;
+/// The most moves a group's vectors search in a list in place of the tree; beyond it the
+/// tree, which prunes by each vector's own segment, is faster. A listed move costs a box
+/// test (see [`DIRECT_BALL_MOVES`] for a ball).
+const DIRECT_MOVES: usize = 256;
+
+/// [`DIRECT_MOVES`] for a ball, whose listed moves cost one bounding-sphere test each: the
+/// list pays off far beyond. On the dense mount_rush program (about a thousand moves near
+/// each group) 256 made the ball's verify 51.6 G instructions, 1024 43.6 G, 4096 40.8 G; for
+/// a flat end mill, with box tests, 4096 cost 3 % more than 256.
+const DIRECT_BALL_MOVES: usize = 4096;
+
+/// The most columns a group's vectors search in a list in place of the tree (each listed
+/// column costs a box test; 1024 and 4096 made mount_rush's flat end mill slower).
+const DIRECT_COLUMNS: usize = 256;
 
 const SAFETY: f64 = 4.0;
 const MIN_FACING: f64 = 0.5;
@@ -1103,6 +1114,15 @@ fn measure_vectors(
         Extras::from_items(Vec::new(), Vec::new(), 0.0)
     };
     let rr = puck.a + puck.r;
+    // A ball's volumes are capsules, which their bounding spheres fit well enough to test
+    // listed moves by them alone; a flat end mill's and a bull's pucks are flatter than
+    // their spheres, and their boxes prune more (see `Extras::visit_listed`).
+    let ball = puck.a == 0.0;
+    let move_limit = if ball {
+        DIRECT_BALL_MOVES
+    } else {
+        DIRECT_MOVES
+    };
     // Every move's volume lies within `rr` of its centres' segment: `round` allows for
     // rounding (see `Extras::gather`).
     let scale = volumes.items.iter().fold(0.0f64, |m, it| {
@@ -1207,9 +1227,9 @@ fn measure_vectors(
         );
         Some((mv, a.tip + puck.r * a.axis, b.tip + puck.r * b.axis))
     };
-    // `among`: the items of `volumes` and of `columns` to search instead of the trees (a
+    // `among`: the items of `volumes` and of `columns` to search instead of each tree (a
     // superset of those the vector's segment up to its seed's entry meets; see the tiles
-    // below), or `None`.
+    // below), or `None` for a tree.
     // The entry of `v` into the seed's move (a move that cut a neighbour), if it faces
     // right: it bounds the search from the start. It is met again in the search and changes
     // nothing there.
@@ -1228,7 +1248,7 @@ fn measure_vectors(
     let direct_one = |v: &Vector,
                       seeded: (bool, Option<(Entry, u32)>),
                       queue: &mut Vec<(f64, f64, u32)>,
-                      among: Option<(&[u32], &[u32])>|
+                      among: (Option<&[u32]>, Option<&[u32]>)|
      -> PerVector {
         let mut stats = [0usize; 5];
         let line = Line {
@@ -1275,8 +1295,9 @@ fn measure_vectors(
                 }
                 hi
             };
-            match among {
-                Some((vols, _)) => Extras::visit_listed(vols, hi0, f),
+            match among.0 {
+                Some(vols) if ball => Extras::visit_listed(vols, hi0, f),
+                Some(vols) => volumes.visit_among(vols, &line, hi0, f),
                 None => volumes.visit(&line, hi0, f),
             }
             queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.2.cmp(&q.2)));
@@ -1310,12 +1331,13 @@ fn measure_vectors(
                 }
                 found.map_or(hi, |(f, _)| f.s.min(hi))
             };
-            match among {
-                Some((vols, _)) => Extras::visit_listed(vols, hi0, f),
+            match among.0 {
+                Some(vols) if ball => Extras::visit_listed(vols, hi0, f),
+                Some(vols) => volumes.visit_among(vols, &line, hi0, f),
                 None => volumes.visit(&line, hi0, f),
             }
         }
-        column_entry(&line, v.hi, &mut found, &mut stats[1], among.map(|a| a.1));
+        column_entry(&line, v.hi, &mut found, &mut stats[1], among.1);
         let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
             let dev = Deviation {
                 position: v.o,
@@ -1659,7 +1681,12 @@ fn measure_vectors(
                             match bound {
                                 Some(b) => pending.push((i, b)),
                                 None => {
-                                    let r = direct_one(v, (seed.is_some(), None), &mut queue, None);
+                                    let r = direct_one(
+                                        v,
+                                        (seed.is_some(), None),
+                                        &mut queue,
+                                        (None, None),
+                                    );
                                     keep(i, r, &mut seed);
                                 }
                             }
@@ -1683,10 +1710,13 @@ fn measure_vectors(
                         (lo, hi) = (lo - pad, hi + pad);
                         vols.clear();
                         cols.clear();
-                        let gathered = volumes.gather(lo, hi, round, DIRECT_CANDIDATES, &mut vols)
-                            && columns.gather(lo, hi, 0.0, DIRECT_CANDIDATES, &mut cols);
+                        let listed = (
+                            volumes.gather(lo, hi, round, move_limit, &mut vols),
+                            columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols),
+                        );
                         for &(i, b) in &pending {
-                            let among = gathered.then_some((&vols[..], &cols[..]));
+                            let among =
+                                (listed.0.then_some(&vols[..]), listed.1.then_some(&cols[..]));
                             let r =
                                 direct_one(&chunk[i as usize], (true, Some(b)), &mut queue, among);
                             keep(i, r, &mut seed);
