@@ -1743,10 +1743,17 @@ fn measure_vectors(
             );
         } else {
             let found = find(chunk);
-            let per: Vec<PerVector> = chunk.par_iter().zip(found.par_iter()).map(one).collect();
-            for r in &per {
-                add(&mut stats, &r.4);
-                readings.push(Reading::of(r));
+            let per: Vec<(Reading, [usize; 5])> = chunk
+                .par_iter()
+                .zip(found.par_iter())
+                .map(|x| {
+                    let r = one(x);
+                    (Reading::of(&r), r.4)
+                })
+                .collect();
+            for (r, s) in per {
+                add(&mut stats, &s);
+                readings.push(r);
             }
         }
         if let Some(p) = progress {
