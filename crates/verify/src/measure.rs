@@ -202,12 +202,16 @@ const DIRECT_MOVES: usize = 256;
 
 /// [`DIRECT_MOVES`] for a ball, whose listed moves cost one bounding-sphere test each: the
 /// list pays off far beyond. On the dense mount_rush program (about a thousand moves near
-/// each group) 256 made the ball's verify 51.6 G instructions, 1024 43.6 G, 4096 40.8 G; for
-/// a flat end mill, with box tests, 4096 cost 3 % more than 256.
+/// each group; callgrind, 1 thread) the ball's verify took 51.6 G instructions at 256,
+/// 43.6 G at 1024 and 40.8 G at 4096 (columns' limit raised alike), 39.8 G at 4096 with the
+/// columns kept at [`DIRECT_COLUMNS`]. A flat end mill's listed moves tested by spheres
+/// alone took 33.8 G at 4096 against 31.2 G at 256, by boxes 32.1 G at 4096: a flat end mill
+/// and a bull keep [`DIRECT_MOVES`] and the box test.
 const DIRECT_BALL_MOVES: usize = 4096;
 
 /// The most columns a group's vectors search in a list in place of the tree (each listed
-/// column costs a box test; 1024 and 4096 made mount_rush's flat end mill slower).
+/// column costs a box test). Raised to 4096 with the ball's moves, it cost mount_rush's
+/// ball program 40.8 G instructions against 39.8 G at 256.
 const DIRECT_COLUMNS: usize = 256;
 
 const SAFETY: f64 = 4.0;
