@@ -329,30 +329,55 @@ pub fn verify(
     verify_with_progress(part, toolpath, cutter, cfg, None)
 }
 
-/// The box (`[x0, y0, z0, x1, y1, z1]`, mm) holding every point within `reach` mm of the
-/// volume swept by the cutter's end along the feed moves (tips and the points `R` up the
-/// axis, grown by `R + reach`), `None` without feed moves.
-fn swept_region(toolpath: &Toolpath, cutter: &Cutter, reach: f64) -> Option<[f64; 6]> {
+/// The region the refinement must cover (see [`refine::Region`]): a box holding the end of
+/// the cutter (up to `2R` along its axis, radius `R`) along the feed moves, and the vectors'
+/// lengths `inside`/`outside` (mm); `None` without feed moves.
+///
+/// A translation sweeps its cylinder within the hull of its two ends, whose box is that of
+/// their end discs (a disc of radius `R` about axis `k` spans `R·√(1 − k_i²)` along axis
+/// `i`): nothing below the tips of a vertical tool. A move that turns the axis keeps every
+/// point of the end within `√5·R` of its tip, which moves along a segment.
+fn swept_region(
+    toolpath: &Toolpath,
+    cutter: &Cutter,
+    inside: f64,
+    outside: f64,
+) -> Option<refine::Region> {
     let r = cutter.radius();
     let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
     for w in toolpath.moves.windows(2) {
         if w[1].kind == cam_core::MoveKind::Rapid {
             continue;
         }
-        for p in [w[0].pose, w[1].pose] {
-            for q in [p.tip, p.tip + r * p.axis] {
-                lo = lo.min(q);
-                hi = hi.max(q);
+        let (a, b) = (w[0].pose, w[1].pose);
+        if a.axis == b.axis {
+            let k = a.axis;
+            let e = r * (DVec3::ONE - k * k).max(DVec3::ZERO).sqrt();
+            for p in [a.tip, b.tip] {
+                for q in [p, p + 2.0 * r * k] {
+                    lo = lo.min(q - e);
+                    hi = hi.max(q + e);
+                }
+            }
+        } else {
+            let e = DVec3::splat(5f64.sqrt() * r);
+            for p in [a.tip, b.tip] {
+                lo = lo.min(p - e);
+                hi = hi.max(p + e);
             }
         }
     }
-    if !(lo.is_finite() && hi.is_finite() && reach.is_finite()) {
+    if !(lo.is_finite() && hi.is_finite() && inside.is_finite() && outside.is_finite()) {
         return None;
     }
     // A relative margin for rounding.
-    let grow = r + reach + 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
-    let (lo, hi) = (lo - DVec3::splat(grow), hi + DVec3::splat(grow));
-    Some([lo.x, lo.y, lo.z, hi.x, hi.y, hi.z])
+    let grow = DVec3::splat(1e-9 * (1.0 + r + lo.abs().max(hi.abs()).max_element()));
+    let (lo, hi) = (lo - grow, hi + grow);
+    Some(refine::Region {
+        bounds: [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z],
+        inside_mm: inside,
+        outside_mm: outside,
+    })
 }
 
 /// A stage of [`verify_with_progress`].
@@ -480,7 +505,8 @@ pub fn verify_with_progress(
         rcfg.region = swept_region(
             toolpath,
             cutter,
-            cfg.deviation.inside_mm.max(cfg.deviation.outside_mm),
+            cfg.deviation.inside_mm,
+            cfg.deviation.outside_mm,
         );
     }
     // One averaged normal per vertex, creases included: at a convex edge a face normal runs

@@ -51,11 +51,11 @@ pub struct RefineConfig {
     pub max_vertices: Option<usize>,
     /// What to do when the cap is hit.
     pub on_cap: CapPolicy,
-    /// Only faces meeting this box `[x0, y0, z0, x1, y1, z1]` (mm) are refined (and their
+    /// Only where a normal vector can meet this region are faces refined (and their
     /// neighbours as far as conforming bisection needs); `None` refines everything. A
-    /// verification passes the box within which a normal vector can meet the swept volume:
-    /// outside it no vertex can read anything but "nothing swept".
-    pub region: Option<[f64; 6]>,
+    /// verification passes a box holding the swept volume and its vectors' lengths: outside
+    /// their reach no vertex can read anything but "nothing swept".
+    pub region: Option<Region>,
     /// Remesh the faces into near-equilateral triangles before bisecting (default; see
     /// [`crate::remesh`]): about half the vertices for the same edge bound. `false`
     /// bisects the design faces alone, so a square's vertices stay on a dyadic grid.
@@ -76,6 +76,60 @@ impl RefineConfig {
             remesh: true,
         }
     }
+}
+
+/// Where refinement is needed (see [`RefineConfig::region`]): a box that holds the swept
+/// volume, and how far the normal vectors reach into the material and out of it.
+///
+/// A point inside a design face grows its vector along the face's normal, so a face is
+/// refined, and a point inside it placed, only if that segment can meet the box (the face
+/// swept along its normal, bounded by boxes). Points on the design edges, whose vertex
+/// normals average the faces around, are placed if the box lies within a vector's length
+/// in any direction. The bottom of a part machined from above lies beyond the vectors of
+/// its faces and is left coarse (on the dome, a third of the vertices).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Region {
+    /// `[x0, y0, z0, x1, y1, z1]` (mm): a box holding everything the vectors are measured
+    /// against.
+    pub bounds: [f64; 6],
+    /// How far a vector reaches into the material, against its normal (mm, ≥ 0).
+    pub inside_mm: f64,
+    /// How far a vector reaches out of the material, along its normal (mm, ≥ 0).
+    pub outside_mm: f64,
+}
+
+impl Region {
+    /// Whether the segments from the points `pts` along `n` (`-inside_mm..outside_mm`), or
+    /// the balls of the longer length about them without a direction, can come within
+    /// `slack` (mm) of the box: their bounding boxes against the box grown by `slack`.
+    pub(crate) fn reached(&self, pts: &[DVec3], n: Option<DVec3>, slack: f64) -> bool {
+        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+        for &p in pts {
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+        let (dlo, dhi) = match n {
+            Some(n) => {
+                let (a, b) = (-self.inside_mm * n, self.outside_mm * n);
+                (a.min(b), a.max(b))
+            }
+            None => {
+                let r = self.inside_mm.max(self.outside_mm);
+                (DVec3::splat(-r), DVec3::splat(r))
+            }
+        };
+        let (lo, hi) = (lo + dlo - slack, hi + dhi + slack);
+        let b = &self.bounds;
+        lo.x <= b[3] && hi.x >= b[0] && lo.y <= b[4] && hi.y >= b[1] && lo.z <= b[5] && hi.z >= b[2]
+    }
+}
+
+/// The unit normal of face `t`, `None` for a degenerate face (its points are then tested
+/// without a direction).
+pub(crate) fn face_normal(pos: &[DVec3], t: &[u32; 3]) -> Option<DVec3> {
+    let [a, b, c] = t.map(|i| pos[i as usize]);
+    let n = (b - a).cross(c - a).normalize();
+    n.is_finite().then_some(n)
 }
 
 /// Default resolution `e` of the normal-vector method (mm), as in the paper.
@@ -298,14 +352,28 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
         });
     }
     let (welded_pos, welded_tris) = weld(mesh);
+    let normals0: Vec<Option<DVec3>> = if cfg.region.is_some() {
+        welded_tris
+            .iter()
+            .map(|t| face_normal(&welded_pos, t))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let area: f64 = mesh.triangles().iter().map(|t| t.area()).sum();
     let mut s = cfg.max_edge_mm;
     loop {
         // Near-equilateral faces first (see `crate::remesh`), then bisection where an edge
         // is still longer than `s`.
         let start = if cfg.remesh {
-            crate::remesh::remesh(&welded_pos, &welded_tris, s, cfg.region, cfg.max_vertices)
-                .map(|r| (r.pos, r.tris, r.src))
+            crate::remesh::remesh(
+                &welded_pos,
+                &welded_tris,
+                s,
+                cfg.region.as_ref().map(|r| (r, normals0.as_slice())),
+                cfg.max_vertices,
+            )
+            .map(|r| (r.pos, r.tris, r.src))
         } else {
             Ok((
                 welded_pos.clone(),
@@ -314,7 +382,14 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
             ))
         };
         let refined = start.and_then(|(pos, tris, src)| {
-            split_edges(pos, tris, src, s, cfg.max_vertices, cfg.region)
+            split_edges(
+                pos,
+                tris,
+                src,
+                s,
+                cfg.max_vertices,
+                cfg.region.as_ref().map(|r| (r, normals0.as_slice())),
+            )
         });
         match refined {
             Ok((pos, tris, src)) => {
@@ -354,12 +429,16 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
     }
 }
 
-/// Whether a face meets the region (its box against the region's; everywhere without one).
-pub(crate) fn meets_region(region: Option<[f64; 6]>, pos: &[DVec3], t: &[u32; 3]) -> bool {
-    let Some(r) = region else { return true };
-    let [a, b, c] = t.map(|i| pos[i as usize]);
-    let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
-    lo.x <= r[3] && hi.x >= r[0] && lo.y <= r[4] && hi.y >= r[1] && lo.z <= r[5] && hi.z >= r[2]
+/// A region and the normals of the design faces (welded), which faces' points reach along.
+pub(crate) type RegionOf<'a> = Option<(&'a Region, &'a [Option<DVec3>])>;
+
+/// Whether face `t`, lying in design face `src`, can reach the region along that face's
+/// normal (everywhere without a region).
+pub(crate) fn meets_region(region: RegionOf<'_>, pos: &[DVec3], t: &[u32; 3], src: u32) -> bool {
+    let Some((r, normals)) = region else {
+        return true;
+    };
+    r.reached(&t.map(|i| pos[i as usize]), normals[src as usize], 0.0)
 }
 
 /// The index `k` of the longest edge `t[k] → t[k+1]` of a face; ties go to the smaller edge
@@ -395,9 +474,9 @@ fn split_edges(
     mut src: Vec<u32>,
     s: f64,
     cap: Option<usize>,
-    region: Option<[f64; 6]>,
+    region: RegionOf<'_>,
 ) -> Result<(Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>), usize> {
-    let inside = |pos: &[DVec3], t: &[u32; 3]| meets_region(region, pos, t);
+    let inside = |pos: &[DVec3], t: &[u32; 3], src: u32| meets_region(region, pos, t, src);
     let s2 = s * s;
     if let Some(c) = cap
         && pos.len() > c
@@ -418,7 +497,7 @@ fn split_edges(
         for (t, &sidx) in tris.iter().zip(&src) {
             let k = longest_edge(&pos, t);
             if pos[t[k] as usize].distance_squared(pos[t[(k + 1) % 3] as usize]) > s2 {
-                if inside(&pos, t) {
+                if inside(&pos, t, sidx) {
                     active.push(*t);
                     active_src.push(sidx);
                     longest.push(k);

@@ -19,9 +19,10 @@
 //! midpoints inserted until none is left; whatever is left longer (faces only partly in the
 //! region) the conforming bisection splits. Every new vertex lies on its face (an edge point
 //! or a point of the face's plane inside it), so the refined faces lie on the design surface
-//! as before. With a region, faces that do not meet it are left alone, and new points (on
-//! edges and inside) are placed only within `s` of it: the faces that do meet it are cut
-//! exactly as without a region, so the region changes no reading.
+//! as before. With a region ([`crate::refine::Region`]), faces whose vectors cannot reach it
+//! are left alone, and new points are placed only where a vector from within `s` of them
+//! can (inside a face along its normal, on an edge in any direction): the points placed are
+//! those placed without a region, so a vertex reads the same with or without one.
 //!
 //! A face whose triangulation is not what it must be (a conflict, a lost point, a count that
 //! a triangulation of that polygon cannot have) is fanned from its centroid instead, and the
@@ -76,25 +77,27 @@ pub(crate) fn remesh(
     pos0: &[DVec3],
     tris0: &[[u32; 3]],
     s: f64,
-    region: Option<[f64; 6]>,
+    region: crate::refine::RegionOf<'_>,
     cap: Option<usize>,
 ) -> Result<Remeshed, usize> {
     let len = |a: u32, b: u32| pos0[a as usize].distance(pos0[b as usize]);
     let active: Vec<bool> = tris0
         .par_iter()
-        .map(|t| {
+        .enumerate()
+        .map(|(f, t)| {
             (0..3).any(|k| len(t[k], t[(k + 1) % 3]) > s)
-                && crate::refine::meets_region(region, pos0, t)
+                && crate::refine::meets_region(region, pos0, t, f as u32)
         })
         .collect();
-    // New points only within `s` of the region (the rest of a face that reaches out of it
-    // keeps long triangles, as the bisection would).
-    let near = |p: DVec3| {
-        region.is_none_or(|r| {
-            p.cmpge(DVec3::new(r[0], r[1], r[2]) - s).all()
-                && p.cmple(DVec3::new(r[3], r[4], r[5]) + s).all()
-        })
+    // New points only where a vector from within `s` of them can reach the region (the rest
+    // of a face that reaches out of it keeps long triangles, as the bisection would): inside
+    // face `f` along its normal, on an edge in any direction (`f = None`).
+    let near_of = |f: Option<usize>| {
+        move |p: DVec3| {
+            region.is_none_or(|(r, normals)| r.reached(&[p], f.and_then(|f| normals[f]), s))
+        }
     };
+    let near = near_of(None);
     // Divided edges: key -> (first new vertex, count), points from the lower-numbered end.
     let mut pos = pos0.to_vec();
     let mut divided: IntMap<u64, (u32, u32)> = IntMap::default();
@@ -127,10 +130,11 @@ pub(crate) fn remesh(
         let lattice: usize = tris0
             .par_iter()
             .zip(&active)
-            .filter(|(_, a)| **a)
-            .map(|(t, _)| {
+            .enumerate()
+            .filter(|(_, (_, a))| **a)
+            .map(|(f, (t, _))| {
                 Frame::new(pos0, t).map_or(0, |fr| {
-                    lattice_points(&fr, LATTICE * s, &near, room + 1, |_, _, _| {})
+                    lattice_points(&fr, LATTICE * s, &near_of(Some(f)), room + 1, |_, _, _| {})
                 })
             })
             .sum();
@@ -146,7 +150,8 @@ pub(crate) fn remesh(
         .par_iter()
         .zip(&active)
         .with_max_len(64)
-        .map_init(Scratch::default, |scratch, (t, &act)| {
+        .enumerate()
+        .map_init(Scratch::default, |scratch, (f, (t, &act))| {
             let touched = (0..3)
                 .any(|k| divided.contains_key(&crate::refine::edge_key(t[k], t[(k + 1) % 3])));
             if !act && !touched {
@@ -160,7 +165,7 @@ pub(crate) fn remesh(
                 t,
                 if act { LATTICE * s } else { 0.0 },
                 s,
-                &near,
+                &near_of(Some(f)),
             );
             Some(fm.unwrap_or_else(|| fan(pos0, &divided, t)))
         })

@@ -10,7 +10,12 @@ fn block() -> Mesh {
 
 /// A box x ∈ [x0, x1], y ∈ [-10, 10], z ∈ [-10, 0] (closed, outward winding).
 pub(crate) fn box_mesh(x0: f64, x1: f64) -> Mesh {
-    let (y0, y1, z0, z1) = (-10.0, 10.0, -10.0, 0.0);
+    box_mesh_z(x0, x1, -10.0)
+}
+
+/// A box x ∈ [x0, x1], y ∈ [-10, 10], z ∈ [z0, 0] (closed, outward winding).
+fn box_mesh_z(x0: f64, x1: f64, z0: f64) -> Mesh {
+    let (y0, y1, z1) = (-10.0, 10.0, 0.0);
     let p = |x, y, z| DVec3::new(x, y, z);
     let quad =
         |a: DVec3, b: DVec3, c: DVec3, d: DVec3| [Triangle::new(a, b, c), Triangle::new(a, c, d)];
@@ -253,6 +258,56 @@ fn refining_within_reach_changes_no_reading() {
         a.max_gouge_mm
     );
     assert!(near.refined.positions.len() * 2 < all.refined.positions.len());
+}
+
+/// A plate 4 mm thick under a pass: its bottom lies within a vector's length (5 mm out) of
+/// the swept volume, but its vectors point down, away from it, so it stays coarse (no
+/// vertex inside it). Every reading of the whole plate refined is read at the same vertex
+/// (position and normal) within reach; where the coarse part meets the fine one, the
+/// bisection adds a few vertices of its own.
+#[test]
+fn a_bottom_facing_away_is_not_refined_and_changes_no_reading() {
+    let cutter = Cutter::ball(6.0).unwrap();
+    let mut cfg = VerifyConfig::new(0.01);
+    cfg.resolution_mm = 0.02;
+    let part = box_mesh_z(-30.0, 0.0, -4.0);
+    let path = pass(-5.0, -0.05);
+    let near = verify(&part, &path, &cutter, &cfg).unwrap();
+    cfg.refine_everywhere = true;
+    let all = verify(&part, &path, &cutter, &cfg).unwrap();
+    let inside_bottom =
+        |v: &&DVec3| v.z == -4.0 && v.x > -30.0 && v.x < 0.0 && v.y > -10.0 && v.y < 10.0;
+    let count =
+        |r: &cam_verify::refine::RefinedMesh| r.positions.iter().filter(inside_bottom).count();
+    let (cn, ca) = (count(&near.refined), count(&all.refined));
+    eprintln!(
+        "bottom interior vertices: {cn} within reach, {ca} everywhere; vertices {} against {}; \
+         measured {} against {}",
+        near.refined.positions.len(),
+        all.refined.positions.len(),
+        near.report.measured,
+        all.report.measured
+    );
+    assert_eq!(cn, 0);
+    assert!(ca > 1000, "{ca}");
+    let key = |d: &cam_verify::deviation::Deviation| {
+        (
+            d.position.to_array().map(f64::to_bits),
+            d.normal.to_array().map(f64::to_bits),
+        )
+    };
+    let read: std::collections::HashMap<_, _> = near
+        .deviations
+        .iter()
+        .map(|d| (key(d), d.signed_mm))
+        .collect();
+    let mut compared = 0;
+    for d in all.deviations.iter().filter(|d| d.signed_mm.is_some()) {
+        assert_eq!(read.get(&key(d)), Some(&d.signed_mm), "at {:?}", d.position);
+        compared += 1;
+    }
+    assert!(compared > 400, "{compared}");
+    assert_eq!(near.report.max_gouge_mm, all.report.max_gouge_mm);
 }
 
 /// Settings whose imprint curves would not fit in memory are a typed error before anything

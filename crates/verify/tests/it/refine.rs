@@ -371,7 +371,11 @@ fn region_refines_only_where_asked_and_stays_conforming() {
     let part = refine::refine(
         &m,
         &RefineConfig {
-            region: Some(region),
+            region: Some(refine::Region {
+                bounds: region,
+                inside_mm: 0.0,
+                outside_mm: 0.0,
+            }),
             ..cfg(s)
         },
     )
