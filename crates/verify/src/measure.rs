@@ -178,6 +178,28 @@ fn near_capsule(line: &Line, hi: f64, (m, half): (DVec3, f64), rr: f64) -> bool 
     (line.o + t * line.n).distance_squared(m) <= rho * rho * (1.0 + 1e-12)
 }
 
+/// Whether the segment `lo..hi` of `line` provably stays farther than `rr` from the segment
+/// `c0`–`c1`, decided at its upper end alone (a cheap sufficient test, exact but for a
+/// relative margin of 1e-6 in the squared distance). The distance from a convex set is
+/// convex along a line, and its slope at `hi` is `n·w/|w|`, `w` running from the set's
+/// point nearest to the line's point at `hi`: where `n·w ≤ 0` the distance only falls
+/// towards `hi`, so the least over the segment is `|w|`. Vectors grow outwards, towards the
+/// moves that cut their surface: of the capsules that reach their neighbourhood (a dome's
+/// ball passes a side-step apart each side, whose bounding spheres its vectors pass), most
+/// are decided here.
+fn misses_capsule_at_top(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) -> bool {
+    let q = line.o + hi * line.n;
+    let d = c1 - c0;
+    let dd = d.length_squared();
+    let u = if dd > 0.0 {
+        ((q - c0).dot(d) / dd).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let w = q - (c0 + u * d);
+    w.dot(line.n) <= 0.0 && w.length_squared() > rr * rr * (1.0 + 1e-6)
+}
+
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
 fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
     if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
@@ -1325,6 +1347,7 @@ fn measure_vectors(
                     ..line
                 };
                 if seg.lo > seg.hi
+                    || misses_capsule_at_top(&seg, seg.hi, c0, c1, rr)
                     || crate::exact::capsule_entry(&seg, c0, c1, rr).is_none_or(|b| b.s > best)
                 {
                     continue;
@@ -1333,7 +1356,10 @@ fn measure_vectors(
             }
         } else {
             let f = |ci: usize, hi: f64| {
-                if near_capsule(&line, hi, volumes.mids[ci], rr) {
+                let (_, _, c0, c1) = volumes.items[ci];
+                if near_capsule(&line, hi, volumes.mids[ci], rr)
+                    && !misses_capsule_at_top(&line, hi, c0, c1, rr)
+                {
                     try_move(ci, &mut found);
                 }
                 found.map_or(hi, |(f, _)| f.s.min(hi))
@@ -1860,5 +1886,61 @@ mod tests {
                 segment_box_axes(o, inv, min, max, t0, t0 + len)
             );
         }
+
+        /// A segment the top test rejects stays farther than `rr` from the centres'
+        /// segment all along (sampled at 401 points) and enters no capsule: a test that
+        /// ignored the slope at the top would reject segments that dip into the capsule
+        /// below it (checked: it fails then).
+        #[test]
+        fn top_test_rejects_only_segments_clear_of_the_capsule(
+            o in v3(),
+            n in v3(),
+            c0 in v3(),
+            c1 in v3(),
+            t0 in -3.0..0.0f64,
+            len in 0.0..4.0f64,
+            rr in 0.05..1.5f64,
+        ) {
+            prop_assume!(n.length() > 1e-3);
+            let line = Line { o, n: n.normalize(), lo: t0, hi: t0 + len };
+            if !misses_capsule_at_top(&line, line.hi, c0, c1, rr) {
+                return Ok(());
+            }
+            let d = c1 - c0;
+            let dd = d.length_squared();
+            let dist = |t: f64| {
+                let q = line.o + t * line.n;
+                let u = if dd > 0.0 { ((q - c0).dot(d) / dd).clamp(0.0, 1.0) } else { 0.0 };
+                q.distance(c0 + u * d)
+            };
+            for i in 0..=400 {
+                let t = line.lo + (line.hi - line.lo) * f64::from(i) / 400.0;
+                prop_assert!(dist(t) > rr, "at {t}: {} <= {rr}", dist(t));
+            }
+            prop_assert!(crate::exact::capsule_entry(&line, c0, c1, rr).is_none());
+        }
+    }
+
+    /// The top test decides the common case: a vector rising from a surface towards a
+    /// ball's centre line a side-step away, which passes its bounding sphere.
+    #[test]
+    fn top_test_rejects_a_neighbouring_pass() {
+        let rr = 3.0;
+        // A vector up from the origin, 1 mm deep to 0.01 mm out; a pass 0.5 mm aside with
+        // its centres on the sphere of radius 3 about the origin's tangent plane.
+        let line = Line {
+            o: DVec3::ZERO,
+            n: DVec3::Z,
+            lo: -1.0,
+            hi: 0.01,
+        };
+        let h = (rr * rr - 0.25f64).sqrt() + 0.05;
+        let (c0, c1) = (DVec3::new(0.5, -0.3, h), DVec3::new(0.5, 0.3, h));
+        assert!(near_capsule(&line, line.hi, (0.5 * (c0 + c1), 0.3), rr));
+        assert!(misses_capsule_at_top(&line, line.hi, c0, c1, rr));
+        // The same pass 0.06 mm lower reaches the vector's top: not rejected.
+        let (c0, c1) = (c0 - 0.06 * DVec3::Z, c1 - 0.06 * DVec3::Z);
+        assert!(!misses_capsule_at_top(&line, line.hi, c0, c1, rr));
+        assert!(crate::exact::capsule_entry(&line, c0, c1, rr).is_some());
     }
 }
