@@ -394,7 +394,7 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
         match refined {
             Ok((pos, tris, src)) => {
                 let (positions, normals, triangles) =
-                    vertex_normals(mesh, &pos, &tris, &src, cfg.crease_angle_deg);
+                    vertex_normals(mesh, pos, tris, &src, cfg.crease_angle_deg);
                 return Ok(RefinedMesh {
                     positions,
                     normals,
@@ -607,8 +607,8 @@ fn corner_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 /// Vertex normals by smooth groups; duplicates vertices on creases.
 fn vertex_normals(
     mesh: &Mesh,
-    pos: &[DVec3],
-    tris: &[[u32; 3]],
+    pos: Vec<DVec3>,
+    tris: Vec<[u32; 3]>,
     src: &[u32],
     crease_deg: f64,
 ) -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
@@ -621,7 +621,7 @@ fn vertex_normals(
     let face_n: Vec<DVec3> = src.par_iter().map(|&s| design_n[s as usize]).collect();
     // Incidence in CSR form: corners (face, k) per vertex, in face order.
     let mut start = vec![0u32; pos.len() + 1];
-    for t in tris {
+    for t in &tris {
         for &v in t {
             start[v as usize + 1] += 1;
         }
@@ -710,9 +710,21 @@ fn vertex_normals(
             (normals, count)
         })
         .collect();
+    // One normal per vertex (always so without creases, e.g. at 180°): the vertices and
+    // faces stay as they are.
+    if blocks
+        .iter()
+        .all(|(_, count)| count.iter().all(|&c| c == 1))
+    {
+        let mut normals = Vec::with_capacity(pos.len());
+        for (n, _) in blocks {
+            normals.extend(n);
+        }
+        return (pos, normals, tris);
+    }
     let mut out_pos = Vec::with_capacity(pos.len());
     let mut out_n = Vec::with_capacity(pos.len());
-    let mut out_tris = tris.to_vec();
+    let mut out_tris = tris.clone();
     for (bi, (normals, count)) in blocks.into_iter().enumerate() {
         let b = bi * BLOCK;
         for (i, &c) in count.iter().enumerate() {
