@@ -200,6 +200,54 @@ fn misses_capsule_at_top(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) ->
     w.dot(line.n) <= 0.0 && w.length_squared() > rr * rr * (1.0 + 1e-6)
 }
 
+/// A listed move of a group, laid out for the tests every vector of the group runs on it
+/// ([`near_capsule`] and [`misses_capsule_at_top`], without the division): its item, the
+/// centres' segment `c0 + u·d` and `1/|d|²` (0 for a point), and its bounding sphere
+/// (middle, squared radius with the same allowance).
+#[derive(Clone, Copy)]
+struct Listed {
+    ci: u32,
+    c0: DVec3,
+    d: DVec3,
+    inv_dd: f64,
+    mid: DVec3,
+    rho2: f64,
+}
+
+impl Listed {
+    fn of(volumes: &Extras, ci: u32, rr: f64) -> Listed {
+        let (_, _, c0, c1) = volumes.items[ci as usize];
+        let (mid, half) = volumes.mids[ci as usize];
+        let d = c1 - c0;
+        let dd = d.length_squared();
+        let rho = half + rr;
+        Listed {
+            ci,
+            c0,
+            d,
+            inv_dd: if dd > 0.0 { 1.0 / dd } else { 0.0 },
+            mid,
+            rho2: rho * rho * (1.0 + 1e-12),
+        }
+    }
+
+    /// Whether the segment `lo..hi` of `line` may come within `rr` of the centres' segment:
+    /// not outside the bounding sphere, and not rejected at the top as by
+    /// [`misses_capsule_at_top`] (the point `u` there rounded differently, which only moves
+    /// `w` within the test's margin).
+    #[inline]
+    fn may_reach(&self, line: &Line, hi: f64, rr2: f64) -> bool {
+        let t = (self.mid - line.o).dot(line.n).clamp(line.lo, hi);
+        if (line.o + t * line.n).distance_squared(self.mid) > self.rho2 {
+            return false;
+        }
+        let q = line.o + hi * line.n;
+        let u = ((q - self.c0).dot(self.d) * self.inv_dd).clamp(0.0, 1.0);
+        let w = q - (self.c0 + u * self.d);
+        !(w.dot(line.n) <= 0.0 && w.length_squared() > rr2 * (1.0 + 1e-6))
+    }
+}
+
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
 fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
     if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
@@ -235,6 +283,15 @@ const DIRECT_BALL_MOVES: usize = 4096;
 /// column costs a box test). Raised to 4096 with the ball's moves, it cost mount_rush's
 /// ball program 40.8 G instructions against 39.8 G at 256.
 const DIRECT_COLUMNS: usize = 256;
+
+/// How far out (mm) a tile's box reaches along its vectors: their groups' boxes, which
+/// reach to their seeds' entries, mostly lie within it (see `measure_vectors`).
+const TILE_REACH_MM: f64 = 1.0;
+
+/// The most moves (columns) a tile lists for its groups to filter; beyond, each group
+/// walks the tree.
+const TILE_MOVES: usize = 8192;
+const TILE_COLUMNS: usize = 2048;
 
 const SAFETY: f64 = 4.0;
 const MIN_FACING: f64 = 0.5;
@@ -820,24 +877,27 @@ impl Extras {
 }
 
 impl Extras {
+    /// Whether item `ci`'s centres' segment lies within `round` of the box `lo..=hi`.
+    fn near_box(&self, ci: u32, lo: DVec3, hi: DVec3, round: f64) -> bool {
+        let (_, _, c0, c1) = self.items[ci as usize];
+        let d = c1 - c0;
+        let len = d.length();
+        let axis = Line {
+            o: c0,
+            n: if len > 0.0 { d / len } else { DVec3::X },
+            lo: 0.0,
+            hi: len,
+        };
+        crate::proximity::segment_box_distance2(&axis, lo, hi) <= round * round
+    }
+
     /// The items whose boxes meet the box `lo..=hi` (boundaries included), in ascending
     /// order (the order [`Extras::visit`] meets them in), appended to `out`. With `round`
     /// positive, only those whose centres' segment also lies within `round` of that box.
     /// Stops, returning `false`, once `out` holds more than `limit` items.
     fn gather(&self, lo: DVec3, hi: DVec3, round: f64, limit: usize, out: &mut Vec<u32>) -> bool {
         let meets = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
-        let near = |ci: u32| {
-            let (_, _, c0, c1) = self.items[ci as usize];
-            let d = c1 - c0;
-            let len = d.length();
-            let axis = Line {
-                o: c0,
-                n: if len > 0.0 { d / len } else { DVec3::X },
-                lo: 0.0,
-                hi: len,
-            };
-            crate::proximity::segment_box_distance2(&axis, lo, hi) <= round * round
-        };
+        let near = |ci: u32| self.near_box(ci, lo, hi, round);
         let mut room = true;
         self.walk(|a, b, first, count| {
             if !meets(a, b) {
@@ -856,6 +916,31 @@ impl Extras {
             true
         });
         room
+    }
+
+    /// [`Extras::gather`] among the items `from` (ascending, holding every item `gather`
+    /// would list for this box: those it lists for a box holding this one): the same items,
+    /// in the same order, and the same answer about the limit, without the tree.
+    fn gather_from(
+        &self,
+        from: &[u32],
+        lo: DVec3,
+        hi: DVec3,
+        round: f64,
+        limit: usize,
+        out: &mut Vec<u32>,
+    ) -> bool {
+        let meets = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
+        for &ci in from {
+            let (bl, bh) = self.bounds[ci as usize];
+            if meets(bl, bh) && (round <= 0.0 || self.near_box(ci, lo, hi, round)) {
+                out.push(ci);
+                if out.len() > limit {
+                    return false;
+                }
+            }
+        }
+        true
     }
 
     /// Calls `f` for each of the items `among`, in order, with no test of its own: for
@@ -1277,7 +1362,8 @@ fn measure_vectors(
     let direct_one = |v: &Vector,
                       seeded: (bool, Option<(Entry, u32)>),
                       queue: &mut Vec<(f64, f64, u32)>,
-                      among: (Option<&[u32]>, Option<&[u32]>)|
+                      among: (Option<&[u32]>, Option<&[u32]>),
+                      listed: Option<&[Listed]>|
      -> PerVector {
         let mut stats = [0usize; 5];
         let line = Line {
@@ -1364,10 +1450,19 @@ fn measure_vectors(
                 }
                 found.map_or(hi, |(f, _)| f.s.min(hi))
             };
-            match among.0 {
-                Some(vols) if ball => Extras::visit_listed(vols, hi0, f),
-                Some(vols) => volumes.visit_among(vols, &line, hi0, f),
-                None => volumes.visit(&line, hi0, f),
+            match (listed, among.0) {
+                (Some(listed), _) => {
+                    let rr2 = rr * rr;
+                    for c in listed {
+                        let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
+                        if c.may_reach(&line, hi, rr2) {
+                            try_move(c.ci as usize, &mut found);
+                        }
+                    }
+                }
+                (None, Some(vols)) if ball => Extras::visit_listed(vols, hi0, f),
+                (None, Some(vols)) => volumes.visit_among(vols, &line, hi0, f),
+                (None, None) => volumes.visit(&line, hi0, f),
             }
         }
         column_entry(&line, v.hi, &mut found, &mut stats[1], among.1);
@@ -1695,6 +1790,24 @@ fn measure_vectors(
                 .map(|tile| {
                     let (mut seed, mut queue) = (None, Vec::new());
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
+                    let mut lay: Vec<Listed> = Vec::new();
+                    // The moves and columns near the tile's vectors, from their starts to
+                    // `TILE_REACH_MM` out, gathered once: a group whose box lies within
+                    // filters these instead of walking the trees (the same lists).
+                    let (mut tlo, mut thi) =
+                        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                    for &(_, i) in tile {
+                        let v = &chunk[i as usize];
+                        let (p, q) = (v.o + v.lo * v.n, v.o + v.hi.min(TILE_REACH_MM) * v.n);
+                        (tlo, thi) = (tlo.min(p).min(q), thi.max(p).max(q));
+                    }
+                    let tpad = 1e-9 * (1.0 + tlo.abs().max(thi.abs()).max_element());
+                    (tlo, thi) = (tlo - tpad, thi + tpad);
+                    let (mut tile_vols, mut tile_cols) = (Vec::new(), Vec::new());
+                    let tile_listed = (
+                        volumes.gather(tlo, thi, round, TILE_MOVES, &mut tile_vols),
+                        columns.gather(tlo, thi, 0.0, TILE_COLUMNS, &mut tile_cols),
+                    );
                     let mut out = Vec::with_capacity(tile.len());
                     let mut sum = [0usize; 5];
                     let mut keep = |i: u32, r: PerVector, seed: &mut Option<_>| {
@@ -1719,6 +1832,7 @@ fn measure_vectors(
                                         (seed.is_some(), None),
                                         &mut queue,
                                         (None, None),
+                                        None,
                                     );
                                     keep(i, r, &mut seed);
                                 }
@@ -1743,15 +1857,43 @@ fn measure_vectors(
                         (lo, hi) = (lo - pad, hi + pad);
                         vols.clear();
                         cols.clear();
+                        let within = lo.cmpge(tlo).all() && hi.cmple(thi).all();
                         let listed = (
-                            volumes.gather(lo, hi, round, move_limit, &mut vols),
-                            columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols),
+                            if within && tile_listed.0 {
+                                volumes
+                                    .gather_from(&tile_vols, lo, hi, round, move_limit, &mut vols)
+                            } else {
+                                volumes.gather(lo, hi, round, move_limit, &mut vols)
+                            },
+                            if within && tile_listed.1 {
+                                columns.gather_from(
+                                    &tile_cols,
+                                    lo,
+                                    hi,
+                                    0.0,
+                                    DIRECT_COLUMNS,
+                                    &mut cols,
+                                )
+                            } else {
+                                columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols)
+                            },
                         );
+                        // A ball's listed moves, laid out once for the group's vectors.
+                        let moves = (ball && listed.0).then(|| {
+                            lay.clear();
+                            lay.extend(vols.iter().map(|&ci| Listed::of(&volumes, ci, rr)));
+                            &lay[..]
+                        });
                         for &(i, b) in &pending {
                             let among =
                                 (listed.0.then_some(&vols[..]), listed.1.then_some(&cols[..]));
-                            let r =
-                                direct_one(&chunk[i as usize], (true, Some(b)), &mut queue, among);
+                            let r = direct_one(
+                                &chunk[i as usize],
+                                (true, Some(b)),
+                                &mut queue,
+                                among,
+                                moves,
+                            );
                             keep(i, r, &mut seed);
                         }
                     }
