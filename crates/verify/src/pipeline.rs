@@ -546,7 +546,7 @@ pub fn verify_with_progress(
     let inner = clip_to_material(
         &part_bvh, &refined, &models, toolpath, cfg, &topology, &mut m,
     )?;
-    let mut devs = m.deviations.clone();
+    let mut devs = std::mem::take(&mut m.deviations);
     let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));
     crease_depths(
         &refined,
