@@ -1393,7 +1393,10 @@ fn measure_vectors(
             // the order of where it enters their slab (the puck lies within `r` of the
             // centres along `k`), a cheap bound; each is tried only if its capsule of radius
             // `a + r` (which holds the puck) is entered before the best entry so far, until
-            // a slab's entry lies beyond it.
+            // a slab's entry lies beyond it. In front of the capsule, two closed-form tests
+            // turn most away: the capsule's distance at the segment's top, and a plane
+            // between the segment and the puck itself (`exact::separated_by_plane`; on the
+            // dome's bull program 15.0 -> 13.1 G instructions).
             queue.clear();
             let f = |ci: usize, hi: f64| {
                 let (_, mv, c0, c1) = volumes.items[ci];
@@ -1434,6 +1437,7 @@ fn measure_vectors(
                 };
                 if seg.lo > seg.hi
                     || misses_capsule_at_top(&seg, seg.hi, c0, c1, rr)
+                    || crate::exact::separated_by_plane(&seg, &puck, c0, c1, axis_of(mv))
                     || crate::exact::capsule_entry(&seg, c0, c1, rr).is_none_or(|b| b.s > best)
                 {
                     continue;
