@@ -879,6 +879,14 @@ impl Extras {
 impl Extras {
     /// Whether item `ci`'s centres' segment lies within `round` of the box `lo..=hi`.
     fn near_box(&self, ci: u32, lo: DVec3, hi: DVec3, round: f64) -> bool {
+        // The segment's bounding sphere first: most of a dense program's short moves are
+        // decided by it.
+        let (mid, half) = self.mids[ci as usize];
+        let gap = (lo - mid).max(mid - hi).max(DVec3::ZERO);
+        let reach = (half + round) * (1.0 + 1e-12);
+        if gap.length_squared() > reach * reach {
+            return false;
+        }
         let (_, _, c0, c1) = self.items[ci as usize];
         let d = c1 - c0;
         let len = d.length();
