@@ -268,6 +268,22 @@ fn misses_column_at_top(line: &Line, c0: DVec3, c1: DVec3, k: DVec3, rr: f64) ->
     w.dot(line.n) <= 0.0 && w.length_squared() > rr * rr * (1.0 + 1e-6)
 }
 
+/// A bull's listed move laid out for its group's vectors, as [`Listed`] for a ball: its
+/// box, its bounding sphere's squared radius as [`near_capsule`] computes it, and its
+/// centres' heights along its axis (for [`slab_interval`]): the same tests, without the
+/// tables.
+#[derive(Clone, Copy)]
+struct PuckListed {
+    ci: u32,
+    bl: DVec3,
+    bh: DVec3,
+    mid: DVec3,
+    rho2: f64,
+    k: DVec3,
+    z0: f64,
+    z1: f64,
+}
+
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
 fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
     if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
@@ -1260,6 +1276,7 @@ fn measure_vectors(
     // listed moves by them alone; a flat end mill's and a bull's pucks are flatter than
     // their spheres, and their boxes prune more (see `Extras::visit_listed`).
     let ball = puck.a == 0.0;
+    let bull = puck.a > 0.0 && puck.r > 0.0;
     let move_limit = if ball {
         DIRECT_BALL_MOVES
     } else {
@@ -1394,7 +1411,8 @@ fn measure_vectors(
                       seeded: (bool, Option<(Entry, u32)>),
                       queue: &mut Vec<(f64, f64, u32)>,
                       among: (Option<&[u32]>, Option<&[u32]>),
-                      listed: Option<&[Listed]>|
+                      listed: Option<&[Listed]>,
+                      pucks_listed: Option<&[PuckListed]>|
      -> PerVector {
         let mut stats = [0usize; 5];
         let line = Line {
@@ -1444,10 +1462,31 @@ fn measure_vectors(
                 }
                 hi
             };
-            match among.0 {
-                Some(vols) if ball => Extras::visit_listed(vols, hi0, f),
-                Some(vols) => volumes.visit_among(vols, &line, hi0, f),
-                None => volumes.visit(&line, hi0, f),
+            match (pucks_listed, among.0) {
+                (Some(listed), _) => {
+                    // `visit_among` with `f` on the laid-out moves: the same tests in the
+                    // same order.
+                    let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+                    for c in listed {
+                        if !segment_box(line.o, inv, c.bl, c.bh, line.lo, hi0) {
+                            continue;
+                        }
+                        let t = (c.mid - line.o).dot(line.n).clamp(line.lo, hi0);
+                        if (line.o + t * line.n).distance_squared(c.mid) > c.rho2 {
+                            continue;
+                        }
+                        let Some((s0, s1)) = slab_interval(&line, c.k, c.z0, c.z1, puck.r) else {
+                            continue;
+                        };
+                        let (s0, s1) = (line.lo.max(s0), hi0.min(s1));
+                        if s0 <= s1 {
+                            queue.push((s0, s1, c.ci));
+                        }
+                    }
+                }
+                (None, Some(vols)) if ball => Extras::visit_listed(vols, hi0, f),
+                (None, Some(vols)) => volumes.visit_among(vols, &line, hi0, f),
+                (None, None) => volumes.visit(&line, hi0, f),
             }
             queue.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.2.cmp(&q.2)));
             for &(s0, s1, ci) in queue.iter() {
@@ -1826,6 +1865,7 @@ fn measure_vectors(
                     let (mut seed, mut queue) = (None, Vec::new());
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
                     let mut lay: Vec<Listed> = Vec::new();
+                    let mut play: Vec<PuckListed> = Vec::new();
                     // The moves and columns near the tile's vectors, from their starts to
                     // `TILE_REACH_MM` out, gathered once: a group whose box lies within
                     // filters these instead of walking the trees (the same lists).
@@ -1867,6 +1907,7 @@ fn measure_vectors(
                                         (seed.is_some(), None),
                                         &mut queue,
                                         (None, None),
+                                        None,
                                         None,
                                     );
                                     keep(i, r, &mut seed);
@@ -1919,6 +1960,28 @@ fn measure_vectors(
                             lay.extend(vols.iter().map(|&ci| Listed::of(&volumes, ci, rr)));
                             &lay[..]
                         });
+                        // A bull's, likewise.
+                        let bull_moves = (bull && listed.0).then(|| {
+                            play.clear();
+                            play.extend(vols.iter().map(|&ci| {
+                                let (_, mv, c0, c1) = volumes.items[ci as usize];
+                                let (bl, bh) = volumes.bounds[ci as usize];
+                                let (mid, half) = volumes.mids[ci as usize];
+                                let rho = half + rr;
+                                let k = axis_of(mv);
+                                PuckListed {
+                                    ci,
+                                    bl,
+                                    bh,
+                                    mid,
+                                    rho2: rho * rho * (1.0 + 1e-12),
+                                    k,
+                                    z0: c0.dot(k),
+                                    z1: c1.dot(k),
+                                }
+                            }));
+                            &play[..]
+                        });
                         for &(i, b) in &pending {
                             let among =
                                 (listed.0.then_some(&vols[..]), listed.1.then_some(&cols[..]));
@@ -1928,6 +1991,7 @@ fn measure_vectors(
                                 &mut queue,
                                 among,
                                 moves,
+                                bull_moves,
                             );
                             keep(i, r, &mut seed);
                         }
