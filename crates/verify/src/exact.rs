@@ -638,6 +638,18 @@ pub fn convex_translation_entry(
     first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
+/// `1/x`, or 0 for `x = 0` (a segment of no length, for [`from_segment`]).
+pub(crate) fn inv_or_zero(x: f64) -> f64 {
+    if x > 0.0 { 1.0 / x } else { 0.0 }
+}
+
+/// The point of the segment `c0 + u·d` (`u ∈ [0, 1]`) nearest to `q`; `inv_dd` is `1/|d|²`
+/// ([`inv_or_zero`]: `c0` for a point).
+#[inline]
+pub(crate) fn from_segment(q: DVec3, c0: DVec3, d: DVec3, inv_dd: f64) -> DVec3 {
+    c0 + ((q - c0).dot(d) * inv_dd).clamp(0.0, 1.0) * d
+}
+
 /// Whether a plane separates the segment `lo..hi` of `line` from the puck swept by a
 /// translation from centre `c0` to `c1` (axis `k`), by more than a margin for rounding
 /// (1e-9 of the coordinates' size, and 1e-9 mm): a sufficient test in closed form, with no
@@ -652,13 +664,10 @@ pub(crate) fn separated_by_plane(line: &Line, puck: &Puck, c0: DVec3, c1: DVec3,
     }
     let q = line.at(line.hi);
     let d = c1 - c0;
-    let dd = d.length_squared();
-    let u = if dd > 0.0 {
-        ((q - c0).dot(d) / dd).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let (_, w) = puck.disk_distance(q - (c0 + u * d), k);
+    let (_, w) = puck.disk_distance(
+        q - from_segment(q, c0, d, inv_or_zero(d.length_squared())),
+        k,
+    );
     if w == DVec3::ZERO {
         return false;
     }

@@ -26,7 +26,7 @@ use cam_core::{DVec3, Toolpath};
 use rayon::prelude::*;
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError, Facing};
-use crate::exact::{BodyFrame, Entry, Line, MoveGeometry, Puck};
+use crate::exact::{BodyFrame, Entry, Line, MoveGeometry, Puck, from_segment, inv_or_zero};
 use crate::locate::{Crossing, PatchBvh, Vector, locate};
 use crate::model::{Piece, SweepModel, unkey};
 use crate::refine::RefinedMesh;
@@ -174,8 +174,24 @@ fn slab_interval(line: &Line, k: DVec3, z0: f64, z1: f64, r: f64) -> Option<(f64
 /// middle and half its length ([`Extras::mids`]).
 fn near_capsule(line: &Line, hi: f64, (m, half): (DVec3, f64), rr: f64) -> bool {
     let rho = half + rr;
+    meets_sphere(line, hi, m, rho * rho * (1.0 + 1e-12))
+}
+
+/// Whether the segment `lo..hi` of `line` meets the sphere about `m` of squared radius
+/// `rho2`.
+#[inline]
+fn meets_sphere(line: &Line, hi: f64, m: DVec3, rho2: f64) -> bool {
     let t = (m - line.o).dot(line.n).clamp(line.lo, hi);
-    (line.o + t * line.n).distance_squared(m) <= rho * rho * (1.0 + 1e-12)
+    (line.o + t * line.n).distance_squared(m) <= rho2
+}
+
+/// The top tests' decision (see [`misses_capsule_at_top`]) from `w`, the offset of the
+/// segment's top from the nearest point of a convex set: the distance still falls towards
+/// the top along `n`, and is more than `√rr2` there but for a relative margin of 1e-6 in
+/// the squared distance.
+#[inline]
+fn clear_at_top(w: DVec3, n: DVec3, rr2: f64) -> bool {
+    w.dot(n) <= 0.0 && w.length_squared() > rr2 * (1.0 + 1e-6)
 }
 
 /// Whether the segment `lo..hi` of `line` provably stays farther than `rr` from the segment
@@ -190,18 +206,12 @@ fn near_capsule(line: &Line, hi: f64, (m, half): (DVec3, f64), rr: f64) -> bool 
 fn misses_capsule_at_top(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) -> bool {
     let q = line.o + hi * line.n;
     let d = c1 - c0;
-    let dd = d.length_squared();
-    let u = if dd > 0.0 {
-        ((q - c0).dot(d) / dd).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let w = q - (c0 + u * d);
-    w.dot(line.n) <= 0.0 && w.length_squared() > rr * rr * (1.0 + 1e-6)
+    let w = q - from_segment(q, c0, d, inv_or_zero(d.length_squared()));
+    clear_at_top(w, line.n, rr * rr)
 }
 
 /// A listed move of a group, laid out for the tests every vector of the group runs on it
-/// ([`near_capsule`] and [`misses_capsule_at_top`], without the division): its item, the
+/// ([`near_capsule`] and [`misses_capsule_at_top`]): its item, the
 /// centres' segment `c0 + u·d` and `1/|d|²` (0 for a point), and its bounding sphere
 /// (middle, squared radius with the same allowance).
 #[derive(Clone, Copy)]
@@ -219,32 +229,30 @@ impl Listed {
         let (_, _, c0, c1) = volumes.items[ci as usize];
         let (mid, half) = volumes.mids[ci as usize];
         let d = c1 - c0;
-        let dd = d.length_squared();
         let rho = half + rr;
         Listed {
             ci,
             c0,
             d,
-            inv_dd: if dd > 0.0 { 1.0 / dd } else { 0.0 },
+            inv_dd: inv_or_zero(d.length_squared()),
             mid,
             rho2: rho * rho * (1.0 + 1e-12),
         }
     }
 
-    /// Whether the segment `lo..hi` of `line` may come within `rr` of the centres' segment:
-    /// not outside the bounding sphere, and not rejected at the top as by
-    /// [`misses_capsule_at_top`] (the point `u` there rounded differently, which only moves
-    /// `w` within the test's margin).
+    /// Whether the segment `lo..hi` of `line` may come within `√rr2` of the centres'
+    /// segment: [`near_capsule`], then not rejected by [`misses_capsule_at_top`].
     #[inline]
     fn may_reach(&self, line: &Line, hi: f64, rr2: f64) -> bool {
-        let t = (self.mid - line.o).dot(line.n).clamp(line.lo, hi);
-        if (line.o + t * line.n).distance_squared(self.mid) > self.rho2 {
+        if !meets_sphere(line, hi, self.mid, self.rho2) {
             return false;
         }
         let q = line.o + hi * line.n;
-        let u = ((q - self.c0).dot(self.d) * self.inv_dd).clamp(0.0, 1.0);
-        let w = q - (self.c0 + u * self.d);
-        !(w.dot(line.n) <= 0.0 && w.length_squared() > rr2 * (1.0 + 1e-6))
+        !clear_at_top(
+            q - from_segment(q, self.c0, self.d, self.inv_dd),
+            line.n,
+            rr2,
+        )
     }
 }
 
@@ -258,14 +266,8 @@ fn misses_column_at_top(line: &Line, c0: DVec3, c1: DVec3, k: DVec3, rr: f64) ->
     let across = |x: DVec3| x - x.dot(k) * k;
     let q = across(line.o + line.hi * line.n);
     let (a, d) = (across(c0), across(c1 - c0));
-    let dd = d.length_squared();
-    let u = if dd > 0.0 {
-        ((q - a).dot(d) / dd).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    let w = q - (a + u * d);
-    w.dot(line.n) <= 0.0 && w.length_squared() > rr * rr * (1.0 + 1e-6)
+    let w = q - from_segment(q, a, d, inv_or_zero(d.length_squared()));
+    clear_at_top(w, line.n, rr * rr)
 }
 
 /// A bull's listed move laid out for its group's vectors, as [`Listed`] for a ball: its
@@ -987,16 +989,6 @@ impl Extras {
         true
     }
 
-    /// Calls `f` for each of the items `among`, in order, with no test of its own: for
-    /// visitors that test each item themselves before its exact entry, where a box test in
-    /// front (a necessary condition too) costs more than it saves (`f` returns the new
-    /// upper end of the segment, as for [`Extras::visit`]).
-    fn visit_listed(among: &[u32], mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
-        for &ci in among {
-            hi = f(ci as usize, hi);
-        }
-    }
-
     /// [`Extras::visit`] over the items `among` only (ascending, and holding every item
     /// whose box the segment meets, as [`Extras::gather`] returns for a box holding the
     /// segment): the same calls of `f`, in the same order.
@@ -1274,7 +1266,7 @@ fn measure_vectors(
     let rr = puck.a + puck.r;
     // A ball's volumes are capsules, which their bounding spheres fit well enough to test
     // listed moves by them alone; a flat end mill's and a bull's pucks are flatter than
-    // their spheres, and their boxes prune more (see `Extras::visit_listed`).
+    // their spheres, and their boxes prune more (see `Listed` and `PuckListed`).
     let ball = puck.a == 0.0;
     let bull = puck.a > 0.0 && puck.r > 0.0;
     let move_limit = if ball {
@@ -1471,8 +1463,7 @@ fn measure_vectors(
                         if !segment_box(line.o, inv, c.bl, c.bh, line.lo, hi0) {
                             continue;
                         }
-                        let t = (c.mid - line.o).dot(line.n).clamp(line.lo, hi0);
-                        if (line.o + t * line.n).distance_squared(c.mid) > c.rho2 {
+                        if !meets_sphere(&line, hi0, c.mid, c.rho2) {
                             continue;
                         }
                         let Some((s0, s1)) = slab_interval(&line, c.k, c.z0, c.z1, puck.r) else {
@@ -1484,7 +1475,6 @@ fn measure_vectors(
                         }
                     }
                 }
-                (None, Some(vols)) if ball => Extras::visit_listed(vols, hi0, f),
                 (None, Some(vols)) => volumes.visit_among(vols, &line, hi0, f),
                 (None, None) => volumes.visit(&line, hi0, f),
             }
@@ -1534,7 +1524,6 @@ fn measure_vectors(
                         }
                     }
                 }
-                (None, Some(vols)) if ball => Extras::visit_listed(vols, hi0, f),
                 (None, Some(vols)) => volumes.visit_among(vols, &line, hi0, f),
                 (None, None) => volumes.visit(&line, hi0, f),
             }
