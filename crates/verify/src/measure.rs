@@ -217,6 +217,7 @@ fn misses_capsule_at_top(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) ->
 #[derive(Clone, Copy)]
 struct Listed {
     ci: u32,
+    mv: u32,
     c0: DVec3,
     d: DVec3,
     inv_dd: f64,
@@ -226,12 +227,13 @@ struct Listed {
 
 impl Listed {
     fn of(volumes: &Extras, ci: u32, rr: f64) -> Listed {
-        let (_, _, c0, c1) = volumes.items[ci as usize];
+        let (_, mv, c0, c1) = volumes.items[ci as usize];
         let (mid, half) = volumes.mids[ci as usize];
         let d = c1 - c0;
         let rho = half + rr;
         Listed {
             ci,
+            mv,
             c0,
             d,
             inv_dd: inv_or_zero(d.length_squared()),
@@ -1506,7 +1508,12 @@ fn measure_vectors(
             }
         } else {
             let f = |ci: usize, hi: f64| {
-                let (_, _, c0, c1) = volumes.items[ci];
+                let (_, mv, c0, c1) = volumes.items[ci];
+                // With the best at the segment's start, only a lower-numbered move's tie
+                // could replace it (see `take_least`).
+                if found.is_some_and(|(f, m)| f.s <= line.lo && mv >= m) {
+                    return hi;
+                }
                 if near_capsule(&line, hi, volumes.mids[ci], rr)
                     && !misses_capsule_at_top(&line, hi, c0, c1, rr)
                 {
@@ -1519,6 +1526,9 @@ fn measure_vectors(
                     let rr2 = rr * rr;
                     for c in listed {
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
+                        if found.is_some_and(|(f, m)| f.s <= line.lo && c.mv >= m) {
+                            continue;
+                        }
                         if c.may_reach(&line, hi, rr2) {
                             try_move(c.ci as usize, &mut found);
                         }

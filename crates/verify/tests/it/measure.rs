@@ -677,3 +677,67 @@ fn a_dense_program_is_read_exactly_in_groups() {
         assert!(read > 150, "{spec}: only {read} lines enter the cutter");
     }
 }
+
+/// Vectors that start inside the cutter, in the dense program: each starts 0.5 mm below
+/// the ball's centre at the middle of one of its feed moves, where the balls of many moves
+/// before and after it overlap. Every one reads its start, and its source is the
+/// lowest-numbered move whose volume holds that start (the tie rule of
+/// `measure::take_least`), found by trying every move in order: a search that stops
+/// looking once the start is held must still look at every lower-numbered move.
+#[test]
+fn a_start_inside_many_moves_names_the_lowest_numbered() {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    let (tp, _, _) = dense_program();
+    let ball = Cutter::ball(6.0).unwrap();
+    let cfg = DeviationConfig::default();
+    let n = DVec3::new(0.3, -0.2, 0.9).normalize();
+    let feeds: Vec<usize> = (1..tp.moves.len())
+        .filter(|&i| tp.moves[i].kind != MoveKind::Rapid)
+        .collect();
+    let (mut positions, mut expected) = (Vec::new(), Vec::new());
+    let mut held_by_many = 0;
+    for &i in feeds.iter().step_by(37) {
+        let (a, b) = (tp.moves[i - 1].pose.tip, tp.moves[i].pose.tip);
+        let start = 0.5 * (a + b) + DVec3::new(0.0, 0.0, 3.0 - 0.5);
+        let line = Line {
+            o: start,
+            n,
+            lo: 0.0,
+            hi: 4.0,
+        };
+        let holders: Vec<usize> = feeds
+            .iter()
+            .copied()
+            .filter(|&j| {
+                let g = MoveGeometry {
+                    a: tp.moves[j - 1].pose,
+                    b: tp.moves[j].pose,
+                    puck: Puck::of(&ball),
+                };
+                g.translation_entry(&line).is_some_and(|e| e.s == 0.0)
+            })
+            .collect();
+        assert!(holders.contains(&i), "move {i} holds its own start");
+        held_by_many += usize::from(holders.len() > 10);
+        positions.push(start + cfg.inside_mm * n);
+        expected.push(holders[0] as u32);
+    }
+    assert!(
+        held_by_many * 2 > positions.len(),
+        "most starts lie in many moves' volumes: {held_by_many} of {}",
+        positions.len()
+    );
+    let r = RefinedMesh {
+        normals: vec![n; positions.len()],
+        positions,
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 0.1,
+    };
+    let model = SweepModel::new(&tp, &ball, &SweepConfig::default());
+    let m = measure_with(&r, &[&model], &tp, &cfg, SurfaceModel::Exact, Locator::Fast).unwrap();
+    for (k, d) in m.deviations.iter().enumerate() {
+        assert_eq!(d.signed_mm, Some(-cfg.inside_mm), "vector {k}: {d:?}");
+        assert_eq!(d.source_move, Some(expected[k]), "vector {k}");
+    }
+}
