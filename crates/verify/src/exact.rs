@@ -618,6 +618,9 @@ pub fn convex_translation_entry(
     k: DVec3,
 ) -> Option<Entry> {
     let d = c1 - c0;
+    if let Some(e) = bottom_entry(line, puck, c0, c1, k) {
+        return Some(e);
+    }
     // The distance to the swept puck is convex along the line: outside at `hi` and not
     // rising there, the line is outside over the whole segment (it passes the puck beyond
     // `hi`, or enters it later). One evaluation in place of the walk up from `lo`, for the
@@ -636,6 +639,42 @@ pub fn convex_translation_entry(
         (dist - puck.r, g)
     };
     first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
+}
+
+/// The entry of `line` through the flat bottom of the puck swept by a translation (centres
+/// `c0 → c1`, axis `k`), in closed form, where it is one: no point of the swept puck lies
+/// more than `r` below the lower centre along `k`, so nothing of it lies below the plane
+/// `x·k = min(c0·k, c1·k) − r`, and the lower pose's bottom disk (radius `a` in that plane;
+/// for a level move, the stadium the disk sweeps) belongs to it. A line rising along `k`
+/// that crosses the plane within `lo..=hi` inside that face enters there, with the normal
+/// `−k`. `None` when it does not (the line enters elsewhere, or not at all: left to the
+/// search). On a level floor a bull's vectors meet many moves' bottoms at the same height;
+/// each was a Newton walk.
+fn bottom_entry(line: &Line, puck: &Puck, c0: DVec3, c1: DVec3, k: DVec3) -> Option<Entry> {
+    let nk = line.n.dot(k);
+    if nk <= 0.0 {
+        return None;
+    }
+    let (z0, z1) = (c0.dot(k), c1.dot(k));
+    let s = (z0.min(z1) - puck.r - line.o.dot(k)) / nk;
+    if !(s >= line.lo && s <= line.hi) {
+        return None;
+    }
+    let p = line.at(s);
+    let across = |x: DVec3| x - x.dot(k) * k;
+    let w = if z0 == z1 {
+        let d = across(c1 - c0);
+        across(p - c0)
+            - from_segment(
+                across(p - c0),
+                DVec3::ZERO,
+                d,
+                inv_or_zero(d.length_squared()),
+            )
+    } else {
+        across(p - if z0 < z1 { c0 } else { c1 })
+    };
+    (w.length_squared() <= puck.a * puck.a).then_some(Entry { s, normal: -k })
 }
 
 /// `1/x`, or 0 for `x = 0` (a segment of no length, for [`from_segment`]).

@@ -1526,7 +1526,8 @@ fn measure_vectors(
                     let rr2 = rr * rr;
                     for c in listed {
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                        if found.is_some_and(|(f, m)| f.s <= line.lo && c.mv >= m) {
+                        if hi <= line.lo && found.is_some_and(|(f, m)| f.s <= line.lo && c.mv >= m)
+                        {
                             continue;
                         }
                         if c.may_reach(&line, hi, rr2) {

@@ -435,6 +435,73 @@ fn bull_translation_cut_short_is_the_entry_or_none() {
     );
 }
 
+/// Lines rising through a bull's flat bottom (a vector of a floor the tool rests on, where
+/// the entry is in closed form): level moves, whose whole stadium is bottom, and climbing
+/// ones, whose lower pose's disk is, with axes +Z and tilted, and lines aimed at points
+/// within 1.3·a of the lower centre's foot, so some cross the plane beside the face and
+/// enter elsewhere. The entry equals the brute force over tool instances: never above it,
+/// and within what the instances' spacing allows; most are read off the bottom (`−k`).
+#[test]
+fn a_line_through_a_bulls_flat_bottom_enters_there() {
+    let mut rng = Lcg(0xf1a7_b077);
+    let puck = Puck { a: 1.5, r: 1.5 };
+    let (mut bottoms, mut hits, mut worst) = (0, 0, 0.0f64);
+    for i in 0..3000 {
+        let k = if i % 2 == 0 {
+            DVec3::Z
+        } else {
+            (DVec3::Z + 0.4 * rng.unit()).normalize()
+        };
+        let c0 = rng.centre();
+        let mut d = rng.unit() * rng.range(0.2, 4.0);
+        d -= d.dot(k) * k;
+        if i % 3 != 0 {
+            // Climbing or descending.
+            d += k * rng.range(-1.5, 1.5);
+        }
+        let c1 = c0 + d;
+        let low = if c0.dot(k) <= c1.dot(k) { c0 } else { c1 };
+        let radial = rng.unit();
+        let radial = (radial - radial.dot(k) * k).normalize_or_zero();
+        let target = low - puck.r * k + radial * rng.range(0.0, 1.3 * puck.a);
+        let n = (k + 0.8 * rng.unit()).normalize();
+        if n.dot(k) <= 0.05 {
+            continue;
+        }
+        let line = Line {
+            o: target - n * rng.range(1.0, 4.0),
+            n,
+            lo: -1.0,
+            hi: 8.0,
+        };
+        let e = convex_translation_entry(&line, &puck, c0, c1, k);
+        let m = ((d.length() / 0.004).ceil() as usize).max(1000);
+        let b = (0..=m)
+            .filter_map(|j| puck_entry(&line, &puck, c0.lerp(c1, j as f64 / m as f64), k))
+            .map(|x| x.s)
+            .min_by(f64::total_cmp);
+        match (e, b) {
+            (Some(e), Some(b)) => {
+                hits += 1;
+                assert!(b >= e.s - 1e-9, "case {i}: brute {b} below entry {}", e.s);
+                worst = worst.max(b - e.s);
+                bottoms += usize::from(e.normal == -k);
+            }
+            (None, Some(b)) => panic!("case {i}: instances hit at {b}, the sweep misses"),
+            (Some(e), None) => panic!("case {i}: entry {} where no instance is", e.s),
+            _ => {}
+        }
+    }
+    eprintln!(
+        "flat bottoms: {hits} hits, {bottoms} through the bottom, max brute − entry {worst:.2e}"
+    );
+    assert!(
+        bottoms > 1000 && hits > bottoms + 200,
+        "{hits} hits, {bottoms} bottoms"
+    );
+    assert!(worst < 0.05, "brute force off by {worst} mm");
+}
+
 /// Brute force: the least entry over many column instances along the move, and whether
 /// that instance is entered other than through its base or next to it (its side more than
 /// two instances' spacing above the base, or the line's start).
