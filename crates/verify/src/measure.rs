@@ -1487,9 +1487,11 @@ fn measure_vectors(
                     break;
                 }
                 let (_, mv, c0, c1) = volumes.items[ci as usize];
-                // With the best at the segment's start, only a lower-numbered move's tie
-                // could replace it (see `take_least`).
-                if found.is_some_and(|(f, m)| f.s <= line.lo && mv >= m) {
+                // Entering the slab no earlier than the best entry (at the segment's start,
+                // or where the line crosses a floor that level moves share), the move's
+                // entry cannot lie below it: only a lower-numbered move's tie could replace
+                // it (see `take_least`).
+                if found.is_some_and(|(f, m)| s0 >= f.s && mv >= m) {
                     continue;
                 }
                 let seg = Line {
@@ -1511,7 +1513,7 @@ fn measure_vectors(
                 let (_, mv, c0, c1) = volumes.items[ci];
                 // With the best at the segment's start, only a lower-numbered move's tie
                 // could replace it (see `take_least`).
-                if found.is_some_and(|(f, m)| f.s <= line.lo && mv >= m) {
+                if hi <= line.lo && found.is_some_and(|(f, m)| f.s <= line.lo && mv >= m) {
                     return hi;
                 }
                 if near_capsule(&line, hi, volumes.mids[ci], rr)

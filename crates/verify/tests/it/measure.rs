@@ -741,3 +741,88 @@ fn a_start_inside_many_moves_names_the_lowest_numbered() {
         assert_eq!(d.source_move, Some(expected[k]), "vector {k}");
     }
 }
+
+/// A bull's vectors rising through a floor its level passes share: lines up +Z from below
+/// the plane the tool's flat bottom rests on, under a zig-zag of level passes 1 mm apart
+/// with steps of 0.5 mm, so each line meets the bottoms of some twenty moves at the same
+/// height. Each reads that height, from the lowest-numbered of those moves: a search
+/// that turns away moves whose slab it enters no earlier than the best entry must still
+/// try every lower-numbered one.
+#[test]
+fn a_floor_shared_by_many_moves_names_the_lowest_numbered() {
+    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    let bull = Cutter::bull(6.0, 1.5).unwrap();
+    let mv = |kind, x: f64, y: f64, z: f64| Move {
+        kind,
+        pose: Pose::vertical(DVec3::new(x, y, z)),
+        feed_mm_per_min: Some(1000.0),
+        line: None,
+        pass: None,
+    };
+    let mut moves = vec![mv(MoveKind::Rapid, -10.0, -5.0, 10.0)];
+    moves.push(mv(MoveKind::Plunge, -10.0, -5.0, 0.0));
+    for j in 0..=10 {
+        let y = -5.0 + j as f64;
+        let xs: Vec<f64> = (0..=40).map(|i| -10.0 + 0.5 * i as f64).collect();
+        let xs: Vec<f64> = if j % 2 == 0 {
+            xs
+        } else {
+            xs.into_iter().rev().collect()
+        };
+        for &x in &xs {
+            moves.push(mv(MoveKind::Cut, x, y, 0.0));
+        }
+    }
+    let tp = Toolpath { moves };
+    let cfg = DeviationConfig::default();
+    let n = DVec3::Z;
+    let (mut positions, mut expected) = (Vec::new(), Vec::new());
+    for i in 0..12 {
+        for j in 0..8 {
+            let p = DVec3::new(-7.3 + 1.21 * i as f64, -3.9 + 0.93 * j as f64, 0.0);
+            let line = Line {
+                o: p - cfg.inside_mm * n,
+                n,
+                lo: 0.0,
+                hi: cfg.inside_mm + cfg.outside_mm,
+            };
+            let entries: Vec<(f64, usize)> = (1..tp.moves.len())
+                .filter(|&k| tp.moves[k].kind != MoveKind::Rapid)
+                .filter_map(|k| {
+                    let g = MoveGeometry {
+                        a: tp.moves[k - 1].pose,
+                        b: tp.moves[k].pose,
+                        puck: Puck::of(&bull),
+                    };
+                    g.translation_entry(&line).map(|e| (e.s, k))
+                })
+                .collect();
+            let least = entries.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
+            let ties: Vec<usize> = entries
+                .iter()
+                .filter(|e| e.0 == least)
+                .map(|e| e.1)
+                .collect();
+            assert!(
+                ties.len() > 10,
+                "{p:?}: {} moves meet the floor there",
+                ties.len()
+            );
+            positions.push(p);
+            expected.push((least - cfg.inside_mm, ties[0] as u32));
+        }
+    }
+    let r = RefinedMesh {
+        normals: vec![n; positions.len()],
+        positions,
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 0.1,
+    };
+    let model = SweepModel::new(&tp, &bull, &SweepConfig::default());
+    let m = measure_with(&r, &[&model], &tp, &cfg, SurfaceModel::Exact, Locator::Fast).unwrap();
+    for (k, d) in m.deviations.iter().enumerate() {
+        assert_eq!(d.signed_mm, Some(expected[k].0), "vector {k}: {d:?}");
+        assert_eq!(d.source_move, Some(expected[k].1), "vector {k}");
+    }
+}
