@@ -4,8 +4,6 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use rayon::prelude::*;
-
 use crate::deviation::{Deviation, DeviationConfig};
 use crate::refine::RefineConfig;
 
@@ -148,12 +146,70 @@ impl VerifyReport {
 }
 
 /// Nearest-rank percentile of sorted values (`p` in 0..=100).
-fn percentile(sorted: &[f64], p: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
+/// The index in ascending order of the nearest-rank `p`-th percentile of `n > 0` values.
+fn rank_of(n: usize, p: f64) -> usize {
+    let rank = ((p / 100.0) * n as f64).ceil().max(1.0) as usize;
+    rank.min(n) - 1
+}
+
+/// The least value, the 1st, 50th, 95th and 99th nearest-rank percentiles and the
+/// greatest of `values` (0 each when empty), by selection instead of a sort: each is the
+/// value the sorted order puts at its rank (equal under `total_cmp` means bit-identical).
+fn order_statistics(mut values: Vec<f64>) -> [f64; 6] {
+    let n = values.len();
+    if n == 0 {
+        return [0.0; 6];
     }
-    let rank = ((p / 100.0) * sorted.len() as f64).ceil().max(1.0) as usize;
-    sorted[rank.min(sorted.len()) - 1]
+    let ranks = [
+        0,
+        rank_of(n, 1.0),
+        rank_of(n, 50.0),
+        rank_of(n, 95.0),
+        rank_of(n, 99.0),
+        n - 1,
+    ];
+    let mut out = [0.0; 6];
+    // Ascending ranks: each selection works on what lies above the previous one.
+    let mut from = 0;
+    for (o, &r) in out.iter_mut().zip(&ranks) {
+        if r < from {
+            // The same rank as the previous one.
+            *o = values[r];
+            continue;
+        }
+        let (_, &mut v, _) = values[from..].select_nth_unstable_by(r - from, f64::total_cmp);
+        *o = v;
+        from = r + 1;
+    }
+    out
+}
+
+/// The first `want` items of `keyed` in ascending order that `keep` accepts (it sees them
+/// in that order, and is told which it kept), selecting and sorting only as many as
+/// needed: a block of the least remaining items at a time, doubling. `(key, index)` pairs
+/// are all distinct, so the order is the full sort's.
+fn take_in_order(
+    keyed: &mut [(f64, usize)],
+    want: usize,
+    mut keep: impl FnMut(usize) -> bool,
+) -> usize {
+    let cmp = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    let (mut done, mut block, mut kept) = (0, 64, 0);
+    while kept < want && done < keyed.len() {
+        let end = (done + block).min(keyed.len());
+        if end < keyed.len() {
+            keyed[done..].select_nth_unstable_by(end - done - 1, cmp);
+        }
+        keyed[done..end].sort_unstable_by(cmp);
+        for &(_, i) in &keyed[done..end] {
+            if kept >= want {
+                break;
+            }
+            kept += usize::from(keep(i));
+        }
+        (done, block) = (end, block * 2);
+    }
+    kept
 }
 
 /// Builds the report from per-vertex deviations. `move_lines[m]` is the source line of
@@ -166,9 +222,7 @@ pub fn build_report(
 ) -> VerifyReport {
     let tol = cfg.tolerance_mm;
     let values: Vec<f64> = devs.iter().filter_map(|d| d.signed_mm).collect();
-    let mut sorted = values.clone();
-    // Equal under `total_cmp` means bit-identical: any sort gives the same order.
-    sorted.par_sort_unstable_by(f64::total_cmp);
+    let [least, p01, p50, p95, p99, greatest] = order_statistics(values.clone());
     let measured = values.len();
     let mean = if measured > 0 {
         values.iter().sum::<f64>() / measured as f64
@@ -212,36 +266,28 @@ pub fn build_report(
             .and_then(|m| move_lines.get(m as usize).copied().flatten()),
     };
     let worst = |kind: Finding| {
-        let mut idx: Vec<usize> = devs
+        // Worst first (ties by vertex), each at least the separation from those before.
+        let mut keyed: Vec<(f64, usize)> = devs
             .iter()
             .enumerate()
-            .filter(|(_, d)| match (kind, d.signed_mm) {
-                (Finding::Gouge, Some(v)) => v < 0.0,
-                (Finding::Excess, Some(v)) => v > 0.0,
-                _ => false,
+            .filter_map(|(i, d)| match (kind, d.signed_mm) {
+                (Finding::Gouge, Some(v)) if v < 0.0 => Some((v, i)),
+                (Finding::Excess, Some(v)) if v > 0.0 => Some((-v, i)),
+                _ => None,
             })
-            .map(|(i, _)| i)
             .collect();
-        let key = |i: &usize| {
-            let v = devs[*i].signed_mm.unwrap_or(0.0);
-            if kind == Finding::Gouge { v } else { -v }
-        };
-        idx.par_sort_unstable_by(|a, b| key(a).total_cmp(&key(b)).then(a.cmp(b)));
         let mut out: Vec<WorstLocation> = Vec::new();
         let sep2 = cfg.worst_separation_mm * cfg.worst_separation_mm;
-        for i in idx {
-            if out.len() >= cfg.worst_n {
-                break;
-            }
+        take_in_order(&mut keyed, cfg.worst_n, |i| {
             let p = devs[i].position;
-            if out
+            let apart = out
                 .iter()
-                .any(|w| glam::DVec3::from_array(w.position).distance_squared(p) < sep2)
-            {
-                continue;
+                .all(|w| glam::DVec3::from_array(w.position).distance_squared(p) >= sep2);
+            if apart {
+                out.push(locate(&devs[i], kind));
             }
-            out.push(locate(&devs[i], kind));
-        }
+            apart
+        });
         out
     };
     VerifyReport {
@@ -252,13 +298,13 @@ pub fn build_report(
         vertices: devs.len(),
         measured,
         unmachined: devs.len() - measured,
-        max_gouge_mm: sorted.first().map_or(0.0, |&v| (-v).max(0.0)),
-        max_excess_mm: sorted.last().map_or(0.0, |&v| v.max(0.0)),
+        max_gouge_mm: (-least).max(0.0),
+        max_excess_mm: greatest.max(0.0),
         mean_mm: mean,
-        p50_mm: percentile(&sorted, 50.0),
-        p95_mm: percentile(&sorted, 95.0),
-        p99_mm: percentile(&sorted, 99.0),
-        p01_mm: percentile(&sorted, 1.0),
+        p50_mm: p50,
+        p95_mm: p95,
+        p99_mm: p99,
+        p01_mm: p01,
         tolerance_counts: counts,
         bands,
         worst_gouges: worst(Finding::Gouge),
@@ -293,4 +339,76 @@ pub enum OutputError {
         /// The encoder's message.
         message: String,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The nearest-rank percentile of sorted values: the reference.
+    fn percentile(sorted: &[f64], p: f64) -> f64 {
+        if sorted.is_empty() {
+            return 0.0;
+        }
+        sorted[rank_of(sorted.len(), p)]
+    }
+
+    fn values() -> impl Strategy<Value = Vec<f64>> {
+        // Few distinct values as well as many: ties at the ranks.
+        prop_oneof![
+            proptest::collection::vec(-5.0..5.0f64, 0..400),
+            proptest::collection::vec((-3i32..3).prop_map(|k| f64::from(k) * 0.25), 0..400),
+        ]
+    }
+
+    proptest! {
+        /// Selection gives what the full sort puts at each rank.
+        #[test]
+        fn order_statistics_equal_the_sorted_ranks(v in values()) {
+            let mut sorted = v.clone();
+            sorted.sort_unstable_by(f64::total_cmp);
+            let want = if sorted.is_empty() {
+                [0.0; 6]
+            } else {
+                [
+                    sorted[0],
+                    percentile(&sorted, 1.0),
+                    percentile(&sorted, 50.0),
+                    percentile(&sorted, 95.0),
+                    percentile(&sorted, 99.0),
+                    sorted[sorted.len() - 1],
+                ]
+            };
+            prop_assert_eq!(order_statistics(v), want);
+        }
+
+        /// The items `take_in_order` shows `keep`, and what it keeps, are those of a scan
+        /// of the fully sorted pairs, for a `keep` that depends on what it kept before
+        /// (as the worst locations' separation does).
+        #[test]
+        fn take_in_order_scans_as_the_full_sort(v in values(), want in 0usize..30, gap in 1usize..50) {
+            let mut keyed: Vec<(f64, usize)> = v.iter().copied().zip(0..).collect();
+            let mut sorted = keyed.clone();
+            sorted.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let keep_far = |kept: &mut Vec<usize>, i: usize| {
+                let far = kept.iter().all(|&k: &usize| k.abs_diff(i) >= gap);
+                if far {
+                    kept.push(i);
+                }
+                far
+            };
+            let mut reference = Vec::new();
+            for &(_, i) in &sorted {
+                if reference.len() >= want {
+                    break;
+                }
+                keep_far(&mut reference, i);
+            }
+            let mut got = Vec::new();
+            let n = take_in_order(&mut keyed, want, |i| keep_far(&mut got, i));
+            prop_assert_eq!(n, got.len());
+            prop_assert_eq!(got, reference);
+        }
+    }
 }
