@@ -14,7 +14,7 @@ use cam_core::{Cutter, DVec3, Move, MoveKind, Pose, Toolpath, Triangle};
 use rayon::prelude::*;
 
 use crate::imprint::{
-    CurveInfo, CurveStatus, Half, ImprintConfig, Imprinter, PoseFrame, transport_frames,
+    CurveInfo, CurveStatus, Half, ImprintConfig, Imprinter, Placement, PoseFrame, transport_frames,
 };
 use crate::sweep::{FacetKind, SweepConfig};
 
@@ -264,18 +264,46 @@ impl SweepModel {
     /// feed moves (rotating ones only, with `cfg.rotating_only`) moves the tool. Cheap: no
     /// imprint curve is computed.
     pub fn sweeps_anything(toolpath: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> bool {
-        !stretches(toolpath, cutter, cfg).is_empty()
+        // `stretches` is not empty, decided without building it: a run of feed moves
+        // holds two poses once one of its subdivided poses differs from its first (the
+        // only one kept until then).
+        let max_step = max_step(cfg);
+        let mut first: Option<Pose> = None;
+        for w in toolpath.moves.windows(2) {
+            if skipped(&w[0], &w[1], cfg) {
+                first = None;
+                continue;
+            }
+            let (a, b) = (&w[0].pose, &w[1].pose);
+            let f = *first.get_or_insert(*a);
+            let n = subdivisions(move_length(a, b, cutter), max_step);
+            for s in 1..=n {
+                let p = interpolate(a, b, s as f64 / n as f64);
+                if !(p.tip.distance(f.tip) <= 1e-12 && p.axis.distance(f.axis) <= 1e-12) {
+                    return true;
+                }
+            }
+        }
+        false
     }
 
     /// Builds the model of the sweep of `cutter` along the feed moves of `toolpath`
     /// (see [`crate::sweep`] for what sweeps and where the surface breaks). Curves are
     /// computed in parallel; the result does not depend on the number of threads.
     pub fn new(toolpath: &Toolpath, cutter: &Cutter, cfg: &SweepConfig) -> SweepModel {
+        let sts = stretches(toolpath, cutter, cfg);
+        // The adaptive placement's tables take milliseconds to build: not for a sweep with
+        // nothing to imprint (a program of translations when only rotating moves are
+        // swept), whose inserts and points per curve do not depend on the placement.
         let imp = Imprinter::new(
             cutter,
             &ImprintConfig {
                 inserts: cfg.inserts,
-                placement: cfg.placement,
+                placement: if sts.is_empty() {
+                    Placement::Uniform
+                } else {
+                    cfg.placement
+                },
                 difference: cfg.difference,
             },
         );
@@ -287,7 +315,7 @@ impl SweepModel {
             Half::Cutting
         };
         let r = cutter.corner_radius();
-        let segments: Vec<Segment> = stretches(toolpath, cutter, cfg)
+        let segments: Vec<Segment> = sts
             .into_par_iter()
             .map(|st| {
                 let frames = transport_frames(&st.poses, r);
@@ -648,4 +676,60 @@ fn orient(t: [DVec3; 3], inside: DVec3) -> Option<Triangle> {
         tri.v.swap(1, 2);
     }
     Some(tri)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `sweeps_anything` decides as building the stretches does, on programs that sweep
+    /// nothing (no moves, rapids only, feeds that do not move the tool or move it by less
+    /// than the 1e-12 mm a pose must differ by, translations when only rotating moves
+    /// count) and on ones that sweep something late in the program or only by turning.
+    #[test]
+    fn sweeps_anything_decides_as_the_stretches() {
+        let at = |kind, x: f64, axis: DVec3| Move {
+            kind,
+            pose: Pose {
+                tip: DVec3::new(x, 0.0, 0.0),
+                axis,
+            },
+            feed_mm_per_min: Some(100.0),
+            line: None,
+            pass: None,
+        };
+        let (z, tilted) = (DVec3::Z, DVec3::new(0.1, 0.0, 1.0).normalize());
+        let (cut, rapid) = (MoveKind::Cut, MoveKind::Rapid);
+        let programs: Vec<Vec<Move>> = vec![
+            vec![],
+            vec![at(rapid, 0.0, z)],
+            vec![at(rapid, 0.0, z), at(rapid, 5.0, z)],
+            vec![at(rapid, 0.0, z), at(cut, 0.0, z), at(cut, 0.0, z)],
+            vec![at(rapid, 0.0, z), at(cut, 1e-13, z), at(cut, 2e-13, z)],
+            vec![at(rapid, 0.0, z), at(cut, 0.0, z), at(rapid, 3.0, z), at(cut, 3.0, z)],
+            vec![at(rapid, 0.0, z), at(cut, 0.0, z), at(cut, 3.0, z)],
+            vec![at(rapid, 0.0, z), at(cut, 1e-13, z), at(rapid, 3.0, z), at(cut, 4.0, z)],
+            vec![at(rapid, 0.0, z), at(cut, 0.0, tilted)],
+            vec![at(rapid, 0.0, z), at(cut, 2.0, z), at(cut, 2.0, tilted)],
+        ];
+        let cutter = Cutter::bull(6.0, 1.0).unwrap();
+        let mut yes = 0;
+        for (i, moves) in programs.into_iter().enumerate() {
+            let tp = Toolpath { moves };
+            for rotating_only in [false, true] {
+                let cfg = SweepConfig {
+                    rotating_only,
+                    ..SweepConfig::default()
+                };
+                let built = !stretches(&tp, &cutter, &cfg).is_empty();
+                assert_eq!(
+                    SweepModel::sweeps_anything(&tp, &cutter, &cfg),
+                    built,
+                    "program {i}, rotating only: {rotating_only}"
+                );
+                yes += usize::from(built);
+            }
+        }
+        assert!(yes >= 5, "only {yes} programs sweep something");
+    }
 }
