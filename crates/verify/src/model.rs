@@ -706,9 +706,19 @@ mod tests {
             vec![at(rapid, 0.0, z), at(rapid, 5.0, z)],
             vec![at(rapid, 0.0, z), at(cut, 0.0, z), at(cut, 0.0, z)],
             vec![at(rapid, 0.0, z), at(cut, 1e-13, z), at(cut, 2e-13, z)],
-            vec![at(rapid, 0.0, z), at(cut, 0.0, z), at(rapid, 3.0, z), at(cut, 3.0, z)],
+            vec![
+                at(rapid, 0.0, z),
+                at(cut, 0.0, z),
+                at(rapid, 3.0, z),
+                at(cut, 3.0, z),
+            ],
             vec![at(rapid, 0.0, z), at(cut, 0.0, z), at(cut, 3.0, z)],
-            vec![at(rapid, 0.0, z), at(cut, 1e-13, z), at(rapid, 3.0, z), at(cut, 4.0, z)],
+            vec![
+                at(rapid, 0.0, z),
+                at(cut, 1e-13, z),
+                at(rapid, 3.0, z),
+                at(cut, 4.0, z),
+            ],
             vec![at(rapid, 0.0, z), at(cut, 0.0, tilted)],
             vec![at(rapid, 0.0, z), at(cut, 2.0, z), at(cut, 2.0, tilted)],
         ];

@@ -604,6 +604,13 @@ fn corner_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     u.cross(v).length().atan2(u.dot(v))
 }
 
+/// At or below this cosine of the crease angle, two faces within 178° of each other always
+/// average: `cos 178° ≈ −0.99939`, with room for rounding.
+const ALL_FACES_COS: f64 = -0.9995;
+
+/// `cos 89°`: faces within 89° of a vertex's first face lie within 178° of each other.
+const HEMISPHERE_COS: f64 = 0.017_452_406_437_283_5;
+
 /// Vertex normals by smooth groups; duplicates vertices on creases.
 fn vertex_normals(
     mesh: &Mesh,
@@ -687,6 +694,23 @@ fn vertex_normals(
                 }
                 angles.clear();
                 angles.extend(cs.iter().map(|&(g, j)| angle(g, j)));
+                // Averaging across every crease (180°, as the verifier does) and every face
+                // within 89° of the first, so any two within 178°: every corner's sum takes
+                // every face, in the same order, and is the same. Summed once.
+                if cos_crease <= ALL_FACES_COS
+                    && cs
+                        .iter()
+                        .all(|&(g, _)| face_n[g as usize].dot(n0) >= HEMISPHERE_COS)
+                {
+                    let mut sum = DVec3::ZERO;
+                    for (&(g, _), &w) in cs.iter().zip(&angles) {
+                        sum += w * face_n[g as usize];
+                    }
+                    normals.push(sum.try_normalize().unwrap_or(n0));
+                    count.push(1);
+                    slot.fill(0);
+                    continue;
+                }
                 for (i, &(f, _)) in cs.iter().enumerate() {
                     let nf = face_n[f as usize];
                     let mut sum = DVec3::ZERO;
@@ -819,5 +843,100 @@ mod tests {
         // Closed tetrahedron: no rim.
         let tet = mesh_of(vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], 4);
         assert_eq!(rim_vertices(&tet), vec![false; 4]);
+    }
+
+    /// The vertex normals against the definition, corner by corner: each corner's normal is
+    /// the angle-weighted sum of the normals of the vertex's faces within the crease angle
+    /// of its own face, in face order, normalised (their one normal where they share it). Across every crease (180°, where one sum
+    /// serves every corner of a vertex whose faces lie within 89° of the first), and at
+    /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
+    /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
+    /// used).
+    #[test]
+    fn vertex_normals_equal_the_corner_by_corner_definition() {
+        let mut tris = Vec::new();
+        // A faceted dome: 8 × 4 quads on a sphere of radius 10.
+        let at = |i: usize, j: usize| {
+            let (ph, th) = (
+                std::f64::consts::TAU * i as f64 / 8.0,
+                0.6 * j as f64 / 4.0 + 0.3,
+            );
+            DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()) * 10.0
+        };
+        for i in 0..8 {
+            for j in 0..3 {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                tris.push(Triangle::new(a, c, b));
+                tris.push(Triangle::new(a, d, c));
+            }
+        }
+        // A box corner at (20, 0, 0) and a fin folded back on itself at (30, 0, 0).
+        let o = DVec3::new(20.0, 0.0, 0.0);
+        tris.push(Triangle::new(o, o + DVec3::X, o + DVec3::Y));
+        tris.push(Triangle::new(o, o + DVec3::Z, o + DVec3::X));
+        tris.push(Triangle::new(o, o + DVec3::Y, o + DVec3::Z));
+        let f = DVec3::new(30.0, 0.0, 0.0);
+        tris.push(Triangle::new(f, f + DVec3::X, f + DVec3::Y));
+        let (sn, cs) = 0.1f64.to_radians().sin_cos();
+        tris.push(Triangle::new(f, f + DVec3::new(0.3, cs, sn), f + DVec3::X));
+        // A ridge at (40, 0, 0) whose faces' normals lie 60° apart.
+        let g = DVec3::new(40.0, 0.0, 0.0);
+        let (s30, c30) = 30f64.to_radians().sin_cos();
+        tris.push(Triangle::new(
+            g,
+            g + DVec3::X,
+            g + DVec3::new(0.0, c30, -s30),
+        ));
+        tris.push(Triangle::new(
+            g,
+            g + DVec3::new(0.0, -c30, -s30),
+            g + DVec3::X,
+        ));
+        let m = mesh(tris);
+        let (pos, faces) = weld(&m);
+        let src: Vec<u32> = (0..faces.len() as u32).collect();
+        let fn_: Vec<DVec3> = m
+            .triangles()
+            .iter()
+            .map(|t| t.normal().unwrap_or(DVec3::Z))
+            .collect();
+        for deg in [180.0f64, 179.85, 30.0] {
+            let cos = deg.to_radians().cos();
+            let (out_pos, out_n, out_tris) =
+                vertex_normals(&m, pos.clone(), faces.clone(), &src, deg);
+            for (fi, t) in faces.iter().enumerate() {
+                for k in 0..3 {
+                    let v = t[k];
+                    let mut sum = DVec3::ZERO;
+                    for (gi, u) in faces.iter().enumerate() {
+                        if let Some(j) = u.iter().position(|&x| x == v)
+                            && fn_[gi].dot(fn_[fi]) >= cos
+                        {
+                            let p = |x: u32| pos[x as usize];
+                            sum += corner_angle(p(u[j]), p(u[(j + 1) % 3]), p(u[(j + 2) % 3]))
+                                * fn_[gi];
+                        }
+                    }
+                    // A vertex inside a smooth patch (one normal) keeps its faces' normal.
+                    let mut around = faces
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, u)| u.contains(&v))
+                        .map(|(gi, _)| fn_[gi]);
+                    let first = around.next().expect("the vertex's own face");
+                    let want = if around.all(|n| n == first) {
+                        first
+                    } else {
+                        sum.try_normalize().unwrap_or(fn_[fi])
+                    };
+                    let got = out_tris[fi][k] as usize;
+                    assert_eq!(
+                        out_pos[got], pos[v as usize],
+                        "{deg}°: face {fi} corner {k}"
+                    );
+                    assert_eq!(out_n[got], want, "{deg}°: face {fi} corner {k}");
+                }
+            }
+        }
     }
 }
