@@ -397,26 +397,29 @@ impl TriangleBvh {
 }
 
 /// Entry parameter of the segment into the box, or `None` if it misses (boundary included).
+#[inline]
 fn slab_entry(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> Option<f64> {
-    let (mut lo, mut hi) = (t0, t1);
-    for a in 0..3 {
-        if inv[a].is_infinite() {
-            if o[a] < min[a] || o[a] > max[a] {
-                return None;
-            }
-            continue;
+    // Axis by axis, written out: indexing a vector by a loop counter costs a branch per
+    // access, and rays cast along an axis (the material check's vertical ones) test many
+    // boxes each.
+    #[inline(always)]
+    fn axis(o: f64, inv: f64, min: f64, max: f64, lo: &mut f64, hi: &mut f64) -> bool {
+        if inv.is_infinite() {
+            return !(o < min || o > max);
         }
-        let ta = (min[a] - o[a]) * inv[a];
-        let tb = (max[a] - o[a]) * inv[a];
+        let ta = (min - o) * inv;
+        let tb = (max - o) * inv;
         let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
         let pad = 1e-12 * (1.0 + ta.abs().max(tb.abs()));
-        lo = lo.max(ta - pad);
-        hi = hi.min(tb + pad);
-        if lo > hi {
-            return None;
-        }
+        *lo = lo.max(ta - pad);
+        *hi = hi.min(tb + pad);
+        *lo <= *hi
     }
-    Some(lo)
+    let (mut lo, mut hi) = (t0, t1);
+    (axis(o.x, inv.x, min.x, max.x, &mut lo, &mut hi)
+        && axis(o.y, inv.y, min.y, max.y, &mut lo, &mut hi)
+        && axis(o.z, inv.z, min.z, max.z, &mut lo, &mut hi))
+    .then_some(lo)
 }
 
 /// Spreads the low 21 bits of `v` to every third bit (Morton interleaving).
@@ -612,4 +615,75 @@ pub fn merge_lowest(a: &[Deviation], b: &[Deviation]) -> Vec<Deviation> {
             _ => *x,
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// The slab test as first written, axis by axis in a loop: the reference.
+    fn slab_entry_loop(
+        o: DVec3,
+        inv: DVec3,
+        min: DVec3,
+        max: DVec3,
+        t0: f64,
+        t1: f64,
+    ) -> Option<f64> {
+        let (mut lo, mut hi) = (t0, t1);
+        for a in 0..3 {
+            if inv[a].is_infinite() {
+                if o[a] < min[a] || o[a] > max[a] {
+                    return None;
+                }
+                continue;
+            }
+            let ta = (min[a] - o[a]) * inv[a];
+            let tb = (max[a] - o[a]) * inv[a];
+            let (ta, tb) = if ta <= tb { (ta, tb) } else { (tb, ta) };
+            let pad = 1e-12 * (1.0 + ta.abs().max(tb.abs()));
+            lo = lo.max(ta - pad);
+            hi = hi.min(tb + pad);
+            if lo > hi {
+                return None;
+            }
+        }
+        Some(lo)
+    }
+
+    fn coord() -> impl Strategy<Value = f64> {
+        // Whole numbers too, so rays start on box faces and run in their planes.
+        prop_oneof![-4.0..4.0f64, (-4i32..4).prop_map(f64::from)]
+    }
+
+    fn dir() -> impl Strategy<Value = f64> {
+        prop_oneof![-1.0..1.0f64, Just(0.0), Just(1.0), Just(-1.0)]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(20_000))]
+
+        /// The written-out slab test decides and enters as the loop: rays along the axes
+        /// (infinite inverse components), starting on faces and in their planes included.
+        #[test]
+        fn slab_entry_equals_the_loop(
+            o in (coord(), coord(), coord()),
+            d in (dir(), dir(), dir()),
+            a in (coord(), coord(), coord()),
+            b in (coord(), coord(), coord()),
+            t0 in -2.0..1.0f64,
+            len in 0.0..8.0f64,
+        ) {
+            let d = DVec3::new(d.0, d.1, d.2);
+            prop_assume!(d != DVec3::ZERO);
+            let o = DVec3::new(o.0, o.1, o.2);
+            let (a, b) = (DVec3::new(a.0, a.1, a.2), DVec3::new(b.0, b.1, b.2));
+            let (min, max) = (a.min(b), a.max(b));
+            let inv = DVec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+            let got = slab_entry(o, inv, min, max, t0, t0 + len);
+            let want = slab_entry_loop(o, inv, min, max, t0, t0 + len);
+            prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
+        }
+    }
 }
