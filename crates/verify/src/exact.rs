@@ -663,14 +663,9 @@ fn bottom_entry(line: &Line, puck: &Puck, c0: DVec3, c1: DVec3, k: DVec3) -> Opt
     let p = line.at(s);
     let across = |x: DVec3| x - x.dot(k) * k;
     let w = if z0 == z1 {
-        let d = across(c1 - c0);
-        across(p - c0)
-            - from_segment(
-                across(p - c0),
-                DVec3::ZERO,
-                d,
-                inv_or_zero(d.length_squared()),
-            )
+        // The stadium: the offset from the nearest point of the centres' segment.
+        let (h, d) = (across(p - c0), across(c1 - c0));
+        h - from_segment(h, DVec3::ZERO, d, inv_or_zero(d.length_squared()))
     } else {
         across(p - if z0 < z1 { c0 } else { c1 })
     };
