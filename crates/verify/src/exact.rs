@@ -661,15 +661,20 @@ fn bottom_entry(line: &Line, puck: &Puck, c0: DVec3, c1: DVec3, k: DVec3) -> Opt
         return None;
     }
     let p = line.at(s);
-    let across = |x: DVec3| x - x.dot(k) * k;
     let w = if z0 == z1 {
         // The stadium: the offset from the nearest point of the centres' segment.
-        let (h, d) = (across(p - c0), across(c1 - c0));
+        let (h, d) = (across(p - c0, k), across(c1 - c0, k));
         h - from_segment(h, DVec3::ZERO, d, inv_or_zero(d.length_squared()))
     } else {
-        across(p - if z0 < z1 { c0 } else { c1 })
+        across(p - if z0 < z1 { c0 } else { c1 }, k)
     };
     (w.length_squared() <= puck.a * puck.a).then_some(Entry { s, normal: -k })
+}
+
+/// The part of `x` across the unit axis `k`.
+#[inline]
+pub(crate) fn across(x: DVec3, k: DVec3) -> DVec3 {
+    x - x.dot(k) * k
 }
 
 /// `1/x`, or 0 for `x = 0` (a segment of no length, for [`from_segment`]).

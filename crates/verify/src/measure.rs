@@ -26,7 +26,7 @@ use cam_core::{DVec3, Toolpath};
 use rayon::prelude::*;
 
 use crate::deviation::{Deviation, DeviationConfig, DeviationError, Facing};
-use crate::exact::{BodyFrame, Entry, Line, MoveGeometry, Puck, from_segment, inv_or_zero};
+use crate::exact::{BodyFrame, Entry, Line, MoveGeometry, Puck, across, from_segment, inv_or_zero};
 use crate::locate::{Crossing, PatchBvh, Vector, locate};
 use crate::model::{Piece, SweepModel, unkey};
 use crate::refine::RefinedMesh;
@@ -173,8 +173,15 @@ fn slab_interval(line: &Line, k: DVec3, z0: f64, z1: f64, r: f64) -> Option<(f64
 /// sphere of that segment's capsule (a cheap necessary test); `(m, half)` is the segment's
 /// middle and half its length ([`Extras::mids`]).
 fn near_capsule(line: &Line, hi: f64, (m, half): (DVec3, f64), rr: f64) -> bool {
+    meets_sphere(line, hi, m, sphere_rho2(half, rr))
+}
+
+/// The squared radius of a capsule's bounding sphere (a segment of half length `half`,
+/// radius `rr`), with an allowance for rounding.
+#[inline]
+fn sphere_rho2(half: f64, rr: f64) -> f64 {
     let rho = half + rr;
-    meets_sphere(line, hi, m, rho * rho * (1.0 + 1e-12))
+    rho * rho * (1.0 + 1e-12)
 }
 
 /// Whether the segment `lo..hi` of `line` meets the sphere about `m` of squared radius
@@ -204,10 +211,15 @@ fn clear_at_top(w: DVec3, n: DVec3, rr2: f64) -> bool {
 /// ball passes a side-step apart each side, whose bounding spheres its vectors pass), most
 /// are decided here.
 fn misses_capsule_at_top(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) -> bool {
-    let q = line.o + hi * line.n;
+    clear_of_capsule(line.o + hi * line.n, line.n, c0, c1, rr)
+}
+
+/// [`clear_at_top`] for the capsule of radius `rr` about `c0`–`c1` at the point `q`, the
+/// segment's end the distance falls towards along `n`.
+fn clear_of_capsule(q: DVec3, n: DVec3, c0: DVec3, c1: DVec3, rr: f64) -> bool {
     let d = c1 - c0;
     let w = q - from_segment(q, c0, d, inv_or_zero(d.length_squared()));
-    clear_at_top(w, line.n, rr * rr)
+    clear_at_top(w, n, rr * rr)
 }
 
 /// [`misses_capsule_at_top`] at the other end: the distance at `lo` already rises along
@@ -216,10 +228,7 @@ fn misses_capsule_at_top(line: &Line, hi: f64, c0: DVec3, c1: DVec3, rr: f64) ->
 /// the trees (no seed enters them), so only the trees' search tests it (in the listed
 /// search it cost the dome's ball program 1.3 % and saved mount_rush's 1 %).
 fn misses_capsule_at_bottom(line: &Line, c0: DVec3, c1: DVec3, rr: f64) -> bool {
-    let q = line.o + line.lo * line.n;
-    let d = c1 - c0;
-    let w = q - from_segment(q, c0, d, inv_or_zero(d.length_squared()));
-    clear_at_top(w, -line.n, rr * rr)
+    clear_of_capsule(line.o + line.lo * line.n, -line.n, c0, c1, rr)
 }
 
 /// A listed move of a group, laid out for the tests every vector of the group runs on it
@@ -242,7 +251,6 @@ impl Listed {
         let (_, mv, c0, c1) = volumes.items[ci as usize];
         let (mid, half) = volumes.mids[ci as usize];
         let d = c1 - c0;
-        let rho = half + rr;
         Listed {
             ci,
             mv,
@@ -250,7 +258,7 @@ impl Listed {
             d,
             inv_dd: inv_or_zero(d.length_squared()),
             mid,
-            rho2: rho * rho * (1.0 + 1e-12),
+            rho2: sphere_rho2(half, rr),
         }
     }
 
@@ -277,9 +285,8 @@ impl Listed {
 /// plane across `k`) is convex along the line too. On the dome's ball program it turns
 /// away 98 % of the columns whose boxes the segments meet, and none of those was entered.
 fn misses_column_at_top(line: &Line, c0: DVec3, c1: DVec3, k: DVec3, rr: f64) -> bool {
-    let across = |x: DVec3| x - x.dot(k) * k;
-    let q = across(line.o + line.hi * line.n);
-    let (a, d) = (across(c0), across(c1 - c0));
+    let q = across(line.o + line.hi * line.n, k);
+    let (a, d) = (across(c0, k), across(c1 - c0, k));
     let w = q - from_segment(q, a, d, inv_or_zero(d.length_squared()));
     clear_at_top(w, line.n, rr * rr)
 }
@@ -298,6 +305,26 @@ struct PuckListed {
     k: DVec3,
     z0: f64,
     z1: f64,
+}
+
+impl PuckListed {
+    /// Item `ci` of `volumes`, a translation along the axis `k`, for a puck within `rr` of
+    /// its centres.
+    fn of(volumes: &Extras, ci: u32, rr: f64, k: DVec3) -> PuckListed {
+        let (_, _, c0, c1) = volumes.items[ci as usize];
+        let (bl, bh) = volumes.bounds[ci as usize];
+        let (mid, half) = volumes.mids[ci as usize];
+        PuckListed {
+            ci,
+            bl,
+            bh,
+            mid,
+            rho2: sphere_rho2(half, rr),
+            k,
+            z0: c0.dot(k),
+            z1: c1.dot(k),
+        }
+    }
 }
 
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
@@ -1971,21 +1998,8 @@ fn measure_vectors(
                         let bull_moves = (bull && listed.0).then(|| {
                             play.clear();
                             play.extend(vols.iter().map(|&ci| {
-                                let (_, mv, c0, c1) = volumes.items[ci as usize];
-                                let (bl, bh) = volumes.bounds[ci as usize];
-                                let (mid, half) = volumes.mids[ci as usize];
-                                let rho = half + rr;
-                                let k = axis_of(mv);
-                                PuckListed {
-                                    ci,
-                                    bl,
-                                    bh,
-                                    mid,
-                                    rho2: rho * rho * (1.0 + 1e-12),
-                                    k,
-                                    z0: c0.dot(k),
-                                    z1: c1.dot(k),
-                                }
+                                let k = axis_of(volumes.items[ci as usize].1);
+                                PuckListed::of(&volumes, ci, rr, k)
                             }));
                             &play[..]
                         });
@@ -2151,18 +2165,7 @@ mod tests {
             if !misses_capsule_at_bottom(&line, c0, c1, rr) {
                 return Ok(());
             }
-            let d = c1 - c0;
-            let dd = d.length_squared();
-            let dist = |t: f64| {
-                let q = line.o + t * line.n;
-                let u = if dd > 0.0 { ((q - c0).dot(d) / dd).clamp(0.0, 1.0) } else { 0.0 };
-                q.distance(c0 + u * d)
-            };
-            for i in 0..=400 {
-                let t = line.lo + (line.hi - line.lo) * f64::from(i) / 400.0;
-                prop_assert!(dist(t) > rr, "at {t}: {} <= {rr}", dist(t));
-            }
-            prop_assert!(crate::exact::capsule_entry(&line, c0, c1, rr).is_none());
+            clear_of_the_capsule(&line, c0, c1, rr)?;
         }
 
         /// A segment the top test rejects stays farther than `rr` from the centres'
@@ -2184,19 +2187,35 @@ mod tests {
             if !misses_capsule_at_top(&line, line.hi, c0, c1, rr) {
                 return Ok(());
             }
-            let d = c1 - c0;
-            let dd = d.length_squared();
-            let dist = |t: f64| {
-                let q = line.o + t * line.n;
-                let u = if dd > 0.0 { ((q - c0).dot(d) / dd).clamp(0.0, 1.0) } else { 0.0 };
-                q.distance(c0 + u * d)
-            };
-            for i in 0..=400 {
-                let t = line.lo + (line.hi - line.lo) * f64::from(i) / 400.0;
-                prop_assert!(dist(t) > rr, "at {t}: {} <= {rr}", dist(t));
-            }
-            prop_assert!(crate::exact::capsule_entry(&line, c0, c1, rr).is_none());
+            clear_of_the_capsule(&line, c0, c1, rr)?;
         }
+    }
+
+    /// The segment `lo..hi` of `line` stays farther than `rr` from the segment `c0`–`c1`
+    /// (sampled at 401 points, the distance computed here) and enters no capsule.
+    fn clear_of_the_capsule(
+        line: &Line,
+        c0: DVec3,
+        c1: DVec3,
+        rr: f64,
+    ) -> Result<(), TestCaseError> {
+        let d = c1 - c0;
+        let dd = d.length_squared();
+        let dist = |t: f64| {
+            let q = line.o + t * line.n;
+            let u = if dd > 0.0 {
+                ((q - c0).dot(d) / dd).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            q.distance(c0 + u * d)
+        };
+        for i in 0..=400 {
+            let t = line.lo + (line.hi - line.lo) * f64::from(i) / 400.0;
+            prop_assert!(dist(t) > rr, "at {t}: {} <= {rr}", dist(t));
+        }
+        prop_assert!(crate::exact::capsule_entry(line, c0, c1, rr).is_none());
+        Ok(())
     }
 
     proptest! {

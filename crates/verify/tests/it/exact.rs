@@ -345,6 +345,17 @@ fn bull_case(rng: &mut Lcg, i: i32) -> (DVec3, DVec3, DVec3, Line) {
     (k, c0, c0 + d, line)
 }
 
+/// The least entry of `line` into tool instances along the move `c0 → c1` (axis `k`), no
+/// further apart than 0.004 mm and at least 1000 of them: never below the swept puck's entry,
+/// and above it by at most what that spacing allows along a grazing line.
+fn instances_entry(line: &Line, puck: &Puck, c0: DVec3, c1: DVec3, k: DVec3) -> Option<f64> {
+    let m = (((c1 - c0).length() / 0.004).ceil() as usize).max(1000);
+    (0..=m)
+        .filter_map(|j| puck_entry(line, puck, c0.lerp(c1, j as f64 / m as f64), k))
+        .map(|x| x.s)
+        .min_by(f64::total_cmp)
+}
+
 /// A bull's translation entry on any move (climbing, nearly level and long, along the axis,
 /// tilted axes) against a brute force over tool instances: the inner minimum over the move
 /// is found by Newton's method in one smooth piece of the distance, and the pieces meet
@@ -356,14 +367,9 @@ fn bull_translation_matches_instances_on_any_move() {
     let (mut hits, mut worst) = (0, 0.0f64);
     for i in 0..3000 {
         let (k, c0, c1, line) = bull_case(&mut rng, i);
-        let (d, n) = (c1 - c0, line.n);
+        let n = line.n;
         let e = convex_translation_entry(&line, &puck, c0, c1, k);
-        // Instances no further apart than 0.004 mm along the move.
-        let m = ((d.length() / 0.004).ceil() as usize).max(1000);
-        let b = (0..=m)
-            .filter_map(|j| puck_entry(&line, &puck, c0.lerp(c1, j as f64 / m as f64), k))
-            .map(|x| x.s)
-            .min_by(f64::total_cmp);
+        let b = instances_entry(&line, &puck, c0, c1, k);
         match (e, b) {
             (Some(e), Some(b)) => {
                 hits += 1;
@@ -475,11 +481,7 @@ fn a_line_through_a_bulls_flat_bottom_enters_there() {
             hi: 8.0,
         };
         let e = convex_translation_entry(&line, &puck, c0, c1, k);
-        let m = ((d.length() / 0.004).ceil() as usize).max(1000);
-        let b = (0..=m)
-            .filter_map(|j| puck_entry(&line, &puck, c0.lerp(c1, j as f64 / m as f64), k))
-            .map(|x| x.s)
-            .min_by(f64::total_cmp);
+        let b = instances_entry(&line, &puck, c0, c1, k);
         match (e, b) {
             (Some(e), Some(b)) => {
                 hits += 1;

@@ -678,6 +678,53 @@ fn a_dense_program_is_read_exactly_in_groups() {
     }
 }
 
+/// The entry of `line` into each feed move's puck (`MoveGeometry::translation_entry`), with
+/// the move's index, in move order.
+fn feed_entries(
+    tp: &Toolpath,
+    cutter: &Cutter,
+    line: &cam_verify::exact::Line,
+) -> Vec<(f64, usize)> {
+    use cam_verify::exact::{MoveGeometry, Puck};
+    (1..tp.moves.len())
+        .filter(|&k| tp.moves[k].kind != MoveKind::Rapid)
+        .filter_map(|k| {
+            let g = MoveGeometry {
+                a: tp.moves[k - 1].pose,
+                b: tp.moves[k].pose,
+                puck: Puck::of(cutter),
+            };
+            g.translation_entry(line).map(|e| (e.s, k))
+        })
+        .collect()
+}
+
+/// Measures vertices at `positions` with the normal `n` against `cutter` on `tp` and checks
+/// each reading and its source move against `expected`, in order.
+fn reads_as(
+    tp: &Toolpath,
+    cutter: &Cutter,
+    cfg: &DeviationConfig,
+    positions: Vec<DVec3>,
+    n: DVec3,
+    expected: &[(f64, u32)],
+) {
+    let r = RefinedMesh {
+        normals: vec![n; positions.len()],
+        positions,
+        triangles: Vec::new(),
+        face_source: Vec::new(),
+        max_edge_mm: 0.1,
+    };
+    let model = SweepModel::new(tp, cutter, &SweepConfig::default());
+    let m = measure_with(&r, &[&model], tp, cfg, SurfaceModel::Exact, Locator::Fast).unwrap();
+    assert_eq!(m.deviations.len(), expected.len());
+    for (k, (d, &(s, mv))) in m.deviations.iter().zip(expected).enumerate() {
+        assert_eq!(d.signed_mm, Some(s), "vector {k}: {d:?}");
+        assert_eq!(d.source_move, Some(mv), "vector {k}");
+    }
+}
+
 /// Vectors that start inside the cutter, in the dense program: each starts 0.5 mm below
 /// the ball's centre at the middle of one of its feed moves, where the balls of many moves
 /// before and after it overlap. Every one reads its start, and its source is the
@@ -686,7 +733,7 @@ fn a_dense_program_is_read_exactly_in_groups() {
 /// looking once the start is held must still look at every lower-numbered move.
 #[test]
 fn a_start_inside_many_moves_names_the_lowest_numbered() {
-    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    use cam_verify::exact::Line;
     let (tp, _, _) = dense_program();
     let ball = Cutter::ball(6.0).unwrap();
     let cfg = DeviationConfig::default();
@@ -705,41 +752,22 @@ fn a_start_inside_many_moves_names_the_lowest_numbered() {
             lo: 0.0,
             hi: 4.0,
         };
-        let holders: Vec<usize> = feeds
-            .iter()
-            .copied()
-            .filter(|&j| {
-                let g = MoveGeometry {
-                    a: tp.moves[j - 1].pose,
-                    b: tp.moves[j].pose,
-                    puck: Puck::of(&ball),
-                };
-                g.translation_entry(&line).is_some_and(|e| e.s == 0.0)
-            })
+        let holders: Vec<usize> = feed_entries(&tp, &ball, &line)
+            .into_iter()
+            .filter(|e| e.0 == 0.0)
+            .map(|e| e.1)
             .collect();
         assert!(holders.contains(&i), "move {i} holds its own start");
         held_by_many += usize::from(holders.len() > 10);
         positions.push(start + cfg.inside_mm * n);
-        expected.push(holders[0] as u32);
+        expected.push((-cfg.inside_mm, holders[0] as u32));
     }
     assert!(
         held_by_many * 2 > positions.len(),
         "most starts lie in many moves' volumes: {held_by_many} of {}",
         positions.len()
     );
-    let r = RefinedMesh {
-        normals: vec![n; positions.len()],
-        positions,
-        triangles: Vec::new(),
-        face_source: Vec::new(),
-        max_edge_mm: 0.1,
-    };
-    let model = SweepModel::new(&tp, &ball, &SweepConfig::default());
-    let m = measure_with(&r, &[&model], &tp, &cfg, SurfaceModel::Exact, Locator::Fast).unwrap();
-    for (k, d) in m.deviations.iter().enumerate() {
-        assert_eq!(d.signed_mm, Some(-cfg.inside_mm), "vector {k}: {d:?}");
-        assert_eq!(d.source_move, Some(expected[k]), "vector {k}");
-    }
+    reads_as(&tp, &ball, &cfg, positions, n, &expected);
 }
 
 /// A bull's vectors rising through a floor its level passes share: lines up +Z from below
@@ -750,7 +778,7 @@ fn a_start_inside_many_moves_names_the_lowest_numbered() {
 /// try every lower-numbered one.
 #[test]
 fn a_floor_shared_by_many_moves_names_the_lowest_numbered() {
-    use cam_verify::exact::{Line, MoveGeometry, Puck};
+    use cam_verify::exact::Line;
     let bull = Cutter::bull(6.0, 1.5).unwrap();
     let mv = |kind, x: f64, y: f64, z: f64| Move {
         kind,
@@ -786,17 +814,7 @@ fn a_floor_shared_by_many_moves_names_the_lowest_numbered() {
                 lo: 0.0,
                 hi: cfg.inside_mm + cfg.outside_mm,
             };
-            let entries: Vec<(f64, usize)> = (1..tp.moves.len())
-                .filter(|&k| tp.moves[k].kind != MoveKind::Rapid)
-                .filter_map(|k| {
-                    let g = MoveGeometry {
-                        a: tp.moves[k - 1].pose,
-                        b: tp.moves[k].pose,
-                        puck: Puck::of(&bull),
-                    };
-                    g.translation_entry(&line).map(|e| (e.s, k))
-                })
-                .collect();
+            let entries = feed_entries(&tp, &bull, &line);
             let least = entries.iter().map(|e| e.0).fold(f64::INFINITY, f64::min);
             let ties: Vec<usize> = entries
                 .iter()
@@ -812,17 +830,5 @@ fn a_floor_shared_by_many_moves_names_the_lowest_numbered() {
             expected.push((least - cfg.inside_mm, ties[0] as u32));
         }
     }
-    let r = RefinedMesh {
-        normals: vec![n; positions.len()],
-        positions,
-        triangles: Vec::new(),
-        face_source: Vec::new(),
-        max_edge_mm: 0.1,
-    };
-    let model = SweepModel::new(&tp, &bull, &SweepConfig::default());
-    let m = measure_with(&r, &[&model], &tp, &cfg, SurfaceModel::Exact, Locator::Fast).unwrap();
-    for (k, d) in m.deviations.iter().enumerate() {
-        assert_eq!(d.signed_mm, Some(expected[k].0), "vector {k}: {d:?}");
-        assert_eq!(d.source_move, Some(expected[k].1), "vector {k}");
-    }
+    reads_as(&tp, &bull, &cfg, positions, n, &expected);
 }
