@@ -135,9 +135,9 @@ impl PolyCdt {
         &self.tris
     }
 
-    /// The inner edges (each once) as point pairs, with a triangle beside each (a place to
-    /// start [`PolyCdt::insert_near`] from).
-    pub(crate) fn inner_edges(&self) -> impl Iterator<Item = ([f64; 2], [f64; 2], u32)> + '_ {
+    /// The inner edges (each once) as point pairs, with the triangles on both sides (the
+    /// first a place to start [`PolyCdt::insert_near`] from).
+    pub(crate) fn inner_edges(&self) -> impl Iterator<Item = ([f64; 2], [f64; 2], u32, u32)> + '_ {
         self.tris
             .iter()
             .zip(&self.adj)
@@ -150,6 +150,7 @@ impl PolyCdt {
                             self.pts[v[k] as usize],
                             self.pts[v[(k + 1) % 3] as usize],
                             t as u32,
+                            nb[k],
                         )
                     })
             })

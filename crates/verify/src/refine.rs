@@ -8,8 +8,8 @@
 //! of side `s` without covering one of its vertices (nor into any triangle whose edges are
 //! at most `s`: its smallest enclosing circle is no larger), so sampling the vertices bounds
 //! the undetected gouge by `e`. Bisection alone leaves right-angled faces with edges between
-//! `s/2` and `s`; the remesh reaches the same bound with 0.2–0.75 times the vertices (0.55 on
-//! the dome, 0.27 on sphere_on_plate, 0.64 on mount_rush at s = 0.3), each one normal vector
+//! `s/2` and `s`; the remesh reaches the same bound with 0.15–0.6 times the vertices (0.44 on
+//! the dome, 0.23 on sphere_on_plate, 0.56 on mount_rush at s = 0.3), each one normal vector
 //! fewer to measure.
 //!
 //! Every new vertex lies on an edge of an original triangle or inside it, in its plane, so

@@ -414,8 +414,10 @@ fn region_refines_only_where_asked_and_stays_conforming() {
 
 /// Remeshing into near-equilateral faces keeps every guarantee of the refinement (edges ≤ s,
 /// faces inside their sources with their orientation and area, closed meshes conforming)
-/// with far fewer vertices than bisection alone: measured 0.60×, 0.24× and 0.55× on the
-/// dome, fillet and pocket at s = 0.5 (0.55×, 0.19× and 0.37× at a ball:6's 0.3).
+/// with far fewer vertices than bisection alone: measured 0.49×, 0.22× and 0.49× on the
+/// dome, fillet and pocket at s = 0.5 (0.44×, 0.17× and 0.33× at a ball:6's 0.3). The bound
+/// fails the remesh before its lattice ran along each face's longest edge (0.60×, 0.24×,
+/// 0.55×).
 #[test]
 fn remeshing_keeps_the_guarantees_with_far_fewer_vertices() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/parts");
@@ -450,7 +452,7 @@ fn remeshing_keeps_the_guarantees_with_far_fewer_vertices() {
             r.positions.len(),
             bisected.positions.len()
         );
-        assert!(ratio < 0.65, "{name}: {ratio}");
+        assert!(ratio < 0.53, "{name}: {ratio}");
     }
 }
 
