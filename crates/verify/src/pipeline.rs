@@ -241,7 +241,10 @@ const CREASE_DEG: f64 = 10.0;
 /// design than `|s|` (on a plane its own face is exactly `|s|` away): its vector runs under
 /// an edge, where a tool rolling over the edge is met at a glancing angle (on pycam-textbox
 /// a top-face vertex 1.7 µm from the box's edge read 0.066 mm along its normal under a ball
-/// that rolled off the edge within τ).
+/// that rolled off the edge within τ). The design face a vertex lies in is tried first (on
+/// a curved surface, whose vertex normals lean off their faces, it is nearer than `|s|`),
+/// then the whole design (`part`, the tree of `design`).
+#[allow(clippy::too_many_arguments)]
 fn crease_depths(
     refined: &RefinedMesh,
     devs: &mut [Deviation],
@@ -249,16 +252,22 @@ fn crease_depths(
     exact: Option<(&[&SweepModel], &Toolpath)>,
     open: bool,
     part: &TriangleBvh,
+    design: &[cam_core::Triangle],
     unoriented: &[bool],
 ) {
     let mut cos_min = vec![1.0f64; refined.positions.len()];
+    // A design face each vertex lies in: the source of a refined face around it.
+    let mut own = vec![u32::MAX; refined.positions.len()];
     // The rim of an open mesh: vertices on an edge of one face.
     let on_rim = if open {
         refine::rim_vertices(refined)
     } else {
         vec![false; refined.positions.len()]
     };
-    for t in &refined.triangles {
+    for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
+        for &i in t {
+            own[i as usize] = src;
+        }
         let [a, b, c] = t.map(|i| refined.positions[i as usize]);
         let Some(nf) = (b - a).cross(c - a).try_normalize() else {
             continue;
@@ -268,6 +277,13 @@ fn crease_depths(
             cos_min[i] = cos_min[i].min(refined.normals[i].dot(nf));
         }
     }
+    // Some design face nearer to `p` than `r`.
+    let near_design = |i: usize, p: DVec3, r: f64| {
+        design
+            .get(own[i] as usize)
+            .is_some_and(|t| crate::deviation::distance_to_triangle(p, t) < r)
+            || part.nearest_within(p, r).is_some()
+    };
     let crease = CREASE_DEG.to_radians().cos();
     let sharp = |i: usize| cos_min[i] < crease || on_rim[i];
     // Each vertex on its own: in parallel.
@@ -284,10 +300,7 @@ fn crease_depths(
             // to its own face sees a crease's glancing geometry too: its vector runs under an
             // edge within that distance.
             let entry = refined.positions[i] + s * refined.normals[i];
-            if !sharp(i)
-                && !unoriented[i]
-                && part.nearest_within(entry, -s * (1.0 - 1e-6)).is_none()
-            {
+            if !sharp(i) && !unoriented[i] && !near_design(i, entry, -s * (1.0 - 1e-6)) {
                 return;
             }
             let first_order = s * m.facing[i].abs().min(1.0);
@@ -555,6 +568,7 @@ pub fn verify_with_progress(
         exact,
         topology.boundary_edges > 0,
         &part_bvh,
+        part.triangles(),
         &unoriented,
     );
     timings.measure_s = t.elapsed().as_secs_f64();
