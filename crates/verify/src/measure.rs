@@ -1297,13 +1297,22 @@ fn measure_vectors(
             (lo.min(p).min(q), hi.max(p).max(q))
         },
     );
-    let columns = Extras::columns(models, toolpath, reach);
-    let pucks = Extras::pucks(models, toolpath);
-    let volumes = if direct {
-        Extras::volumes(toolpath, puck)
-    } else {
-        Extras::from_items(Vec::new(), Vec::new(), 0.0)
-    };
+    // Three independent trees: built side by side.
+    let ((columns, pucks), volumes) = rayon::join(
+        || {
+            rayon::join(
+                || Extras::columns(models, toolpath, reach),
+                || Extras::pucks(models, toolpath),
+            )
+        },
+        || {
+            if direct {
+                Extras::volumes(toolpath, puck)
+            } else {
+                Extras::from_items(Vec::new(), Vec::new(), 0.0)
+            }
+        },
+    );
     let rr = puck.a + puck.r;
     // A ball's volumes are capsules, which their bounding spheres fit well enough to test
     // listed moves by them alone; a flat end mill's and a bull's pucks are flatter than

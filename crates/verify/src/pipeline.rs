@@ -264,12 +264,22 @@ fn crease_depths(
     } else {
         vec![false; refined.positions.len()]
     };
-    for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
-        for &i in t {
-            own[i as usize] = src;
+    // Face normals in parallel; the per-vertex minimum in order.
+    let face_n: Vec<Option<DVec3>> = refined
+        .triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| refined.positions[i as usize]);
+            (b - a).cross(c - a).try_normalize()
+        })
+        .collect();
+    for (f, (t, nf)) in refined.triangles.iter().zip(face_n).enumerate() {
+        if let Some(&src) = refined.face_source.get(f) {
+            for &i in t {
+                own[i as usize] = src;
+            }
         }
-        let [a, b, c] = t.map(|i| refined.positions[i as usize]);
-        let Some(nf) = (b - a).cross(c - a).try_normalize() else {
+        let Some(nf) = nf else {
             continue;
         };
         for &i in t {
