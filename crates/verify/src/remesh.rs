@@ -43,7 +43,8 @@ use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 use crate::polycdt::PolyCdt;
 
 /// Rounds of midpoint insertion per face (see [`Midpoints`]); the bisection splits what is
-/// left. More rounds add points: a lattice whose spacing is close to `s` answers each
+/// left. One round leaves more to the bisection, whose right-angled splits cost more points;
+/// more than two add points too: a lattice whose spacing is close to `s` answers each
 /// round's midpoints with new long edges beside them, and the splits run on across it
 /// (on the dome's ball program 1 round leaves 118,654 vertices; 2, 117,414; 3, 117,570;
 /// 8, 118,610).
