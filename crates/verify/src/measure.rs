@@ -346,7 +346,7 @@ const DIRECT_GROUP: usize = 8;
 
 /// The most moves a group's vectors search in a list in place of the tree; beyond it the
 /// tree, which prunes by each vector's own segment, is faster. A listed move costs a box
-/// test (see [`DIRECT_BALL_MOVES`] for a ball).
+/// test (see [`DIRECT_BALL_MOVES`] for a ball, [`DIRECT_BULL_MOVES`] for a bull).
 const DIRECT_MOVES: usize = 256;
 
 /// [`DIRECT_MOVES`] for a ball, whose listed moves cost one bounding-sphere test each: the
@@ -355,8 +355,15 @@ const DIRECT_MOVES: usize = 256;
 /// 43.6 G at 1024 and 40.8 G at 4096 (columns' limit raised alike), 39.8 G at 4096 with the
 /// columns kept at [`DIRECT_COLUMNS`]. A flat end mill's listed moves tested by spheres
 /// alone took 33.8 G at 4096 against 31.2 G at 256, by boxes 32.1 G at 4096: a flat end mill
-/// and a bull keep [`DIRECT_MOVES`] and the box test.
+/// keeps [`DIRECT_MOVES`] and the box test.
 const DIRECT_BALL_MOVES: usize = 4096;
+
+/// [`DIRECT_MOVES`] for a bull, whose listed moves are laid out with their boxes, spheres
+/// and slabs ([`PuckListed`]) and cost about what the tree's own tests do, while a
+/// vector's walk of the tree costs a descent: on the dense mount_rush program (callgrind,
+/// 1 thread) 78.8 G instructions at 256, 70.7 G at 1024, 68.5 G at 4096; the dome's and
+/// sphere_on_plate's bull programs 8.04 -> 8.00 G and 11.09 -> 11.05 G at 4096.
+const DIRECT_BULL_MOVES: usize = 4096;
 
 /// The most columns a group's vectors search in a list in place of the tree (each listed
 /// column costs a box test). Raised to 4096 with the ball's moves, it cost mount_rush's
@@ -1321,6 +1328,8 @@ fn measure_vectors(
     let bull = puck.a > 0.0 && puck.r > 0.0;
     let move_limit = if ball {
         DIRECT_BALL_MOVES
+    } else if bull {
+        DIRECT_BULL_MOVES
     } else {
         DIRECT_MOVES
     };
