@@ -283,6 +283,9 @@ impl Frame {
     }
 }
 
+/// An inner edge longer than `s`: its midpoint, squared length and the triangles beside it.
+type Candidate = ([f64; 2], f64, [usize; 2]);
+
 /// Which inner edges of a face's triangulation get their midpoint, in each of
 /// [`MID_ROUNDS`] rounds: those longer than `s` whose midpoint lies strictly inside the face
 /// (in its frame) and `near` the region, and that are not shorter than another such edge
@@ -321,9 +324,31 @@ impl<'a> Midpoints<'a> {
         (l2 > self.s * self.s && self.inside(m)).then_some((m, l2))
     }
 
-    /// Whether a candidate's midpoint `m` is placed: near the region.
-    fn placed(&self, m: [f64; 2]) -> bool {
-        (self.near)(self.at(m))
+    /// The candidates that get their midpoint this round, as [`Midpoints`] says, appended
+    /// to `out` as (midpoint, the first triangle beside the edge); `longest` is scratch
+    /// for each of the `triangles` triangles' longest candidate.
+    fn choose(
+        &self,
+        cands: &[Candidate],
+        triangles: usize,
+        longest: &mut Vec<f64>,
+        out: &mut Vec<([f64; 2], usize)>,
+    ) {
+        longest.clear();
+        longest.resize(triangles, 0.0);
+        for &(_, l2, sides) in cands {
+            for f in sides {
+                longest[f] = longest[f].max(l2);
+            }
+        }
+        out.extend(
+            cands
+                .iter()
+                .filter(|&&(m, l2, [f, g])| {
+                    l2 >= longest[f] && l2 >= longest[g] && (self.near)(self.at(m))
+                })
+                .map(|&(m, _, [f, _])| (m, f)),
+        );
     }
 
     /// Strictly inside the face, by a margin of 1e-9·s² in the corner cross products.
@@ -439,9 +464,9 @@ struct Scratch {
     cdt: PolyCdt,
     pts: Vec<[f64; 2]>,
     flat: Vec<[f64; 2]>,
-    mids: Vec<([f64; 2], u32)>,
+    mids: Vec<([f64; 2], usize)>,
     /// Candidate midpoints: point, squared length, the triangles beside the edge.
-    cands: Vec<([f64; 2], f64, u32, u32)>,
+    cands: Vec<Candidate>,
     /// Per triangle, the squared length of its longest candidate edge.
     longest: Vec<f64>,
 }
@@ -495,31 +520,17 @@ fn face_mesh_own(
         let rule = Midpoints::new(&frame, s, near);
         for _ in 0..MID_ROUNDS {
             cands.clear();
-            cands.extend(
-                cdt.inner_edges()
-                    .filter_map(|(p, q, t, u)| rule.candidate(p, q).map(|(m, l2)| (m, l2, t, u))),
-            );
-            longest.clear();
-            longest.resize(cdt.triangles().len(), 0.0);
-            for &(_, l2, t, u) in cands.iter() {
-                for f in [t, u] {
-                    longest[f as usize] = f64::max(longest[f as usize], l2);
-                }
-            }
+            cands.extend(cdt.inner_edges().filter_map(|(p, q, t, u)| {
+                rule.candidate(p, q)
+                    .map(|(m, l2)| (m, l2, [t as usize, u as usize]))
+            }));
             mids.clear();
-            mids.extend(
-                cands
-                    .iter()
-                    .filter(|&&(m, l2, t, u)| {
-                        l2 >= longest[t as usize] && l2 >= longest[u as usize] && rule.placed(m)
-                    })
-                    .map(|&(m, _, t, _)| (m, t)),
-            );
+            rule.choose(cands, cdt.triangles().len(), longest, mids);
             if mids.is_empty() {
                 break;
             }
             for &(m, t) in mids.iter() {
-                cdt.insert_near(m, t)?;
+                cdt.insert_near(m, t as u32)?;
                 lattice.push(rule.at(m));
             }
         }
@@ -573,7 +584,7 @@ fn face_mesh_spade(
     if h > 0.0 {
         let rule = Midpoints::new(&frame, s, near);
         for _ in 0..MID_ROUNDS {
-            let cands: Vec<([f64; 2], f64, [usize; 2])> = cdt
+            let cands: Vec<Candidate> = cdt
                 .undirected_edges()
                 .filter(|e| !e.is_constraint_edge())
                 .filter_map(|e| {
@@ -584,21 +595,12 @@ fn face_mesh_spade(
                         .map(|(m, l2)| (m, l2, sides))
                 })
                 .collect();
-            let mut longest = vec![0.0f64; cdt.num_all_faces()];
-            for &(_, l2, sides) in &cands {
-                for f in sides {
-                    longest[f] = longest[f].max(l2);
-                }
-            }
-            let mids: Vec<[f64; 2]> = cands
-                .iter()
-                .filter(|&&(m, l2, [f, g])| l2 >= longest[f] && l2 >= longest[g] && rule.placed(m))
-                .map(|&(m, _, _)| m)
-                .collect();
+            let mut mids = Vec::new();
+            rule.choose(&cands, cdt.num_all_faces(), &mut Vec::new(), &mut mids);
             if mids.is_empty() {
                 break;
             }
-            for m in mids {
+            for (m, _) in mids {
                 let before = cdt.num_vertices();
                 cdt.insert(Point2::new(m[0], m[1])).ok()?;
                 if cdt.num_vertices() != before + 1 {
