@@ -2166,10 +2166,13 @@ mod tests {
             );
         }
 
-        /// The same for the bottom test (checked: it fails when the slope's sign at the
-        /// bottom is taken the wrong way).
+        /// A segment the top test or the bottom test rejects stays farther than `rr` from
+        /// the centres' segment all along (sampled at 401 points) and enters no capsule: a
+        /// top test that ignored the slope at the top would reject segments that dip into
+        /// the capsule below it, and a bottom test that took the slope's sign at the bottom
+        /// the wrong way would reject segments that rise into it (checked: it fails then).
         #[test]
-        fn bottom_test_rejects_only_segments_clear_of_the_capsule(
+        fn top_and_bottom_tests_reject_only_segments_clear_of_the_capsule(
             o in v3(),
             n in v3(),
             c0 in v3(),
@@ -2180,32 +2183,11 @@ mod tests {
         ) {
             prop_assume!(n.length() > 1e-3);
             let line = Line { o, n: n.normalize(), lo: t0, hi: t0 + len };
-            if !misses_capsule_at_bottom(&line, c0, c1, rr) {
-                return Ok(());
+            if misses_capsule_at_top(&line, line.hi, c0, c1, rr)
+                || misses_capsule_at_bottom(&line, c0, c1, rr)
+            {
+                clear_of_the_capsule(&line, c0, c1, rr)?;
             }
-            clear_of_the_capsule(&line, c0, c1, rr)?;
-        }
-
-        /// A segment the top test rejects stays farther than `rr` from the centres'
-        /// segment all along (sampled at 401 points) and enters no capsule: a test that
-        /// ignored the slope at the top would reject segments that dip into the capsule
-        /// below it (checked: it fails then).
-        #[test]
-        fn top_test_rejects_only_segments_clear_of_the_capsule(
-            o in v3(),
-            n in v3(),
-            c0 in v3(),
-            c1 in v3(),
-            t0 in -3.0..0.0f64,
-            len in 0.0..4.0f64,
-            rr in 0.05..1.5f64,
-        ) {
-            prop_assume!(n.length() > 1e-3);
-            let line = Line { o, n: n.normalize(), lo: t0, hi: t0 + len };
-            if !misses_capsule_at_top(&line, line.hi, c0, c1, rr) {
-                return Ok(());
-            }
-            clear_of_the_capsule(&line, c0, c1, rr)?;
         }
     }
 
