@@ -1491,13 +1491,17 @@ fn measure_vectors(
             // A bull's entry costs a Newton search. The moves near the segment up to the best
             // entry so far are taken as they come, each only while where the line enters its
             // slab (the puck lies within `r` of the centres along `k`) is no later than that
-            // best, and only if its capsule of radius `a + r` (which holds the puck) is
-            // entered no later either. In front of the capsule, two closed-form tests turn
-            // most away: the capsule's distance at the segment's top, and a plane between
+            // best. Two closed-form tests turn most away: the distance at the segment's top
+            // to the capsule of radius `a + r` (which holds the puck), and a plane between
             // the segment and the puck itself (`exact::separated_by_plane`; on the dome's
-            // bull program 15.0 -> 13.1 G instructions). Queueing them in the order of
-            // their slabs' entries instead, tested against the seed's entry, cost more than
-            // the order pruned: dome bull 10.22 G with the queue, 9.55 G without.
+            // bull program 15.0 -> 13.1 G instructions). The capsule's entry, once a third
+            // test, turned away 1 in 760 of the moves these leave on the dome (1 in 7 on
+            // mount_rush) and cost more than the Newton searches it saved: dome bull 8.00 ->
+            // 7.48 G, mount_rush 68.5 -> 66.4 G. It also decided a line grazing the puck's rim
+            // (where the capsule touches the puck) apart from the puck's own search, which
+            // a seed's entry uses. Queueing the moves in the order of their slabs' entries
+            // instead, tested against the seed's entry, cost more than the order pruned:
+            // dome bull 10.22 G with the queue, 9.55 G without.
             let mut consider = |s0: f64, s1: f64, ci: usize, found: &mut Option<(Entry, u32)>| {
                 let (_, mv, c0, c1) = volumes.items[ci];
                 // Entering the slab after the best entry, the move cannot beat it; at it (the
@@ -1515,7 +1519,6 @@ fn measure_vectors(
                 if seg.lo > seg.hi
                     || misses_capsule_at_top(&seg, seg.hi, c0, c1, rr)
                     || crate::exact::separated_by_plane(&seg, &puck, c0, c1, axis_of(mv))
-                    || crate::exact::capsule_entry(&seg, c0, c1, rr).is_none_or(|b| b.s > best)
                 {
                     return;
                 }
