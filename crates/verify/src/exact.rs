@@ -488,7 +488,10 @@ pub fn translation_entry(
     k: DVec3,
 ) -> Option<Entry> {
     if puck.a == 0.0 {
-        return capsule_entry(line, c0, c1, puck.r);
+        // Without the hull's rejection: the searches call this for moves whose capsule
+        // their own closed-form tests did not turn away, and most of those are entered
+        // (201 k of 284 k on the dome's ball program): dome ball 2.62 -> 2.57 G.
+        return capsule_entry_with(line, c0, c1, puck.r, false);
     }
     if puck.r == 0.0 {
         return disk_translation_entry(line, puck.a, c0, c1, k);
