@@ -1506,8 +1506,9 @@ fn measure_vectors(
                 let (_, mv, c0, c1) = volumes.items[ci];
                 // Entering the slab after the best entry, the move cannot beat it; at it (the
                 // segment's start, or a floor that level moves share) only a lower-numbered
-                // move's tie could replace it (see `take_least`).
-                if found.is_some_and(|(f, m)| s0 > f.s || (s0 == f.s && mv >= m)) {
+                // move's tie could replace it (see `take_least`). The move that holds the
+                // best (the seed's, mostly) has had its first entry searched already.
+                if found.is_some_and(|(f, m)| m == mv || s0 > f.s || (s0 == f.s && mv >= m)) {
                     return;
                 }
                 let best = found.map_or(hi0, |(f, _)| f.s);
@@ -1582,8 +1583,11 @@ fn measure_vectors(
                     let rr2 = rr * rr;
                     for c in listed {
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                        if hi <= line.lo && found.is_some_and(|(f, m)| f.s <= line.lo && c.mv >= m)
-                        {
+                        // The move that holds the best has had its entry computed; at the
+                        // segment's start only a lower-numbered move's tie could replace it.
+                        if found.is_some_and(|(f, m)| {
+                            m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)
+                        }) {
                             continue;
                         }
                         if c.may_reach(&line, hi, rr2) {
