@@ -327,6 +327,50 @@ impl PuckListed {
     }
 }
 
+/// A listed column of a group (a translation's: axis `k` at both poses), laid out for the
+/// tests every vector of the group runs on it in `column_entry`: its box, and its centres'
+/// segment seen along `k` ([`misses_column_at_top`]'s `a`, `d` and `1/|d|²`).
+#[derive(Clone, Copy)]
+struct ColumnListed {
+    mv: u32,
+    bl: DVec3,
+    bh: DVec3,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+    a: DVec3,
+    d: DVec3,
+    inv_dd: f64,
+}
+
+impl ColumnListed {
+    /// Item `ci` of `columns`, or `None` where the move turns its axis.
+    fn of(columns: &Extras, ci: u32, toolpath: &Toolpath) -> Option<ColumnListed> {
+        let (_, mv, c0, c1) = columns.items[ci as usize];
+        let (a, b) = (
+            toolpath.moves[mv as usize - 1].pose,
+            toolpath.moves[mv as usize].pose,
+        );
+        if a.axis != b.axis {
+            return None;
+        }
+        let k = a.axis;
+        let (bl, bh) = columns.bounds[ci as usize];
+        let d = across(c1 - c0, k);
+        Some(ColumnListed {
+            mv,
+            bl,
+            bh,
+            c0,
+            c1,
+            k,
+            a: across(c0, k),
+            d,
+            inv_dd: inv_or_zero(d.length_squared()),
+        })
+    }
+}
+
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
 fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
     if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
@@ -1385,6 +1429,33 @@ fn measure_vectors(
             None => columns.visit(line, hi, f),
         }
     };
+    // `column_entry` over a group's laid-out columns: the same tests, in the same order.
+    let column_listed = |line: &Line,
+                         hi: f64,
+                         found: &mut Option<(Entry, u32)>,
+                         tests: &mut usize,
+                         listed: &[ColumnListed]| {
+        let tie = 2e-9 * (1.0 + rr);
+        let mut hi = found.map_or(hi, |(e, _)| e.s) - tie;
+        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        for c in listed {
+            if !segment_box(line.o, inv, c.bl, c.bh, line.lo, hi) {
+                continue;
+            }
+            *tests += 1;
+            let q = across(line.o + hi * line.n, c.k);
+            if clear_at_top(q - from_segment(q, c.a, c.d, c.inv_dd), line.n, rr * rr) {
+                continue;
+            }
+            let seg = Line { hi, ..*line };
+            if let Some(e) =
+                crate::column::column_translation_entry(&seg, c.c0, c.c1, c.k, rr, false)
+            {
+                take_least(e, c.mv, found);
+                hi = hi.min(e.s - tie);
+            }
+        }
+    };
     // Both surface models: the imprint surface holds the cutter's corner only. The rest of
     // the cutter is searched directly, move by move: its column (the cutter above its
     // corner, which cuts a wall with its side and reaches deeper than the vectors do) is
@@ -1462,7 +1533,8 @@ fn measure_vectors(
                       seeded: (bool, Option<(Entry, u32)>),
                       among: (Option<&[u32]>, Option<&[u32]>),
                       listed: Option<&[Listed]>,
-                      pucks_listed: Option<&[PuckListed]>|
+                      pucks_listed: Option<&[PuckListed]>,
+                      columns_listed: Option<&[ColumnListed]>|
      -> PerVector {
         let mut stats = [0usize; 5];
         let line = Line {
@@ -1599,7 +1671,10 @@ fn measure_vectors(
                 (None, None) => volumes.visit(&line, hi0, f),
             }
         }
-        column_entry(&line, v.hi, &mut found, &mut stats[1], among.1);
+        match columns_listed {
+            Some(cl) => column_listed(&line, v.hi, &mut found, &mut stats[1], cl),
+            None => column_entry(&line, v.hi, &mut found, &mut stats[1], among.1),
+        }
         let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
             let dev = Deviation {
                 position: v.o,
@@ -1926,6 +2001,7 @@ fn measure_vectors(
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
                     let mut lay: Vec<Listed> = Vec::new();
                     let mut play: Vec<PuckListed> = Vec::new();
+                    let mut clay: Vec<ColumnListed> = Vec::new();
                     // The moves and columns near the tile's vectors, from their starts to
                     // `TILE_REACH_MM` out, gathered once: a group whose box lies within
                     // filters these instead of walking the trees (the same lists).
@@ -1966,6 +2042,7 @@ fn measure_vectors(
                                         v,
                                         (seed.is_some(), None),
                                         (None, None),
+                                        None,
                                         None,
                                         None,
                                     );
@@ -2019,6 +2096,17 @@ fn measure_vectors(
                             lay.extend(vols.iter().map(|&ci| Listed::of(&volumes, ci, rr)));
                             &lay[..]
                         });
+                        // The listed columns, likewise (all translations: a program whose
+                        // moves keep their axes is searched here).
+                        let column_moves = listed.1.then(|| {
+                            clay.clear();
+                            clay.extend(
+                                cols.iter()
+                                    .filter_map(|&ci| ColumnListed::of(&columns, ci, toolpath)),
+                            );
+                            &clay[..]
+                        });
+                        let column_moves = column_moves.filter(|c| c.len() == cols.len());
                         // A bull's, likewise.
                         let bull_moves = (bull && listed.0).then(|| {
                             play.clear();
@@ -2037,6 +2125,7 @@ fn measure_vectors(
                                 among,
                                 moves,
                                 bull_moves,
+                                column_moves,
                             );
                             keep(i, r, &mut seed);
                         }
