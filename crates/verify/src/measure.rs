@@ -285,10 +285,23 @@ impl Listed {
 /// plane across `k`) is convex along the line too. On the dome's ball program it turns
 /// away 98 % of the columns whose boxes the segments meet, and none of those was entered.
 fn misses_column_at_top(line: &Line, c0: DVec3, c1: DVec3, k: DVec3, rr: f64) -> bool {
-    let q = across(line.o + line.hi * line.n, k);
-    let (a, d) = (across(c0, k), across(c1 - c0, k));
-    let w = q - from_segment(q, a, d, inv_or_zero(d.length_squared()));
-    clear_at_top(w, line.n, rr * rr)
+    let d = across(c1 - c0, k);
+    let seen = (across(c0, k), d, inv_or_zero(d.length_squared()));
+    clear_of_column(line.o + line.hi * line.n, line.n, seen, k, rr)
+}
+
+/// [`misses_column_at_top`] at the segment's top `p` (direction `n`), with the centres'
+/// segment already seen along `k`: its start `a`, its run `d` and `1/|d|²`.
+#[inline]
+fn clear_of_column(
+    p: DVec3,
+    n: DVec3,
+    (a, d, inv_dd): (DVec3, DVec3, f64),
+    k: DVec3,
+    rr: f64,
+) -> bool {
+    let q = across(p, k);
+    clear_at_top(q - from_segment(q, a, d, inv_dd), n, rr * rr)
 }
 
 /// A bull's listed move laid out for its group's vectors, as [`Listed`] for a ball: its
@@ -329,7 +342,7 @@ impl PuckListed {
 
 /// A listed column of a group (a translation's: axis `k` at both poses), laid out for the
 /// tests every vector of the group runs on it in `column_entry`: its box, and its centres'
-/// segment seen along `k` ([`misses_column_at_top`]'s `a`, `d` and `1/|d|²`).
+/// segment seen along `k`.
 #[derive(Clone, Copy)]
 struct ColumnListed {
     mv: u32,
@@ -338,9 +351,8 @@ struct ColumnListed {
     c0: DVec3,
     c1: DVec3,
     k: DVec3,
-    a: DVec3,
-    d: DVec3,
-    inv_dd: f64,
+    /// The centres' segment seen along `k` ([`clear_of_column`]).
+    across: (DVec3, DVec3, f64),
 }
 
 impl ColumnListed {
@@ -364,11 +376,15 @@ impl ColumnListed {
             c0,
             c1,
             k,
-            a: across(c0, k),
-            d,
-            inv_dd: inv_or_zero(d.length_squared()),
+            across: (across(c0, k), d, inv_or_zero(d.length_squared())),
         })
     }
+}
+
+/// How far below the best entry a column's entry must lie to replace it (mm; see
+/// `column_entry` in `measure_vectors`), for a cutter of reach `rr`.
+fn column_tie(rr: f64) -> f64 {
+    2e-9 * (1.0 + rr)
 }
 
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
@@ -1389,53 +1405,47 @@ fn measure_vectors(
     // found does not replace it, so boxes that reach the best only by their padding (half
     // that: the bottoms of the many moves over level ground where the best lies) are pruned
     // whole.
-    let column_entry = |line: &Line,
-                        hi: f64,
-                        found: &mut Option<(Entry, u32)>,
-                        tests: &mut usize,
-                        among: Option<&[u32]>| {
-        let tie = 2e-9 * (1.0 + rr);
-        let hi = found.map_or(hi, |(e, _)| e.s) - tie;
-        let f = |ci: usize, hi: f64| {
-            let (_, mv, c0, c1) = columns.items[ci];
-            *tests += 1;
-            let (a, b) = (
-                toolpath.moves[mv as usize - 1].pose,
-                toolpath.moves[mv as usize].pose,
-            );
-            let seg = Line { hi, ..*line };
-            let e = if a.axis == b.axis {
-                if misses_column_at_top(&seg, c0, c1, a.axis, rr) {
-                    return hi;
+    let column_entry =
+        |line: &Line, hi: f64, found: &mut Option<(Entry, u32)>, tests: &mut usize| {
+            let tie = column_tie(rr);
+            let hi = found.map_or(hi, |(e, _)| e.s) - tie;
+            let f = |ci: usize, hi: f64| {
+                let (_, mv, c0, c1) = columns.items[ci];
+                *tests += 1;
+                let (a, b) = (
+                    toolpath.moves[mv as usize - 1].pose,
+                    toolpath.moves[mv as usize].pose,
+                );
+                let seg = Line { hi, ..*line };
+                let e = if a.axis == b.axis {
+                    if misses_column_at_top(&seg, c0, c1, a.axis, rr) {
+                        return hi;
+                    }
+                    crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
+                } else {
+                    // The closed-form hull first: most lines pass clear of a rotating
+                    // move's columns, whose search costs some 90 poses.
+                    rf.geometry(mv)
+                        .filter(|g| g.column_hull_entry(&seg).is_some())
+                        .and_then(|g| g.column_entry(&seg, false))
+                };
+                match e {
+                    Some(e) => {
+                        take_least(e, mv, found);
+                        hi.min(e.s - tie)
+                    }
+                    None => hi,
                 }
-                crate::column::column_translation_entry(&seg, c0, c1, a.axis, rr, false)
-            } else {
-                // The closed-form hull first: most lines pass clear of a rotating
-                // move's columns, whose search costs some 90 poses.
-                rf.geometry(mv)
-                    .filter(|g| g.column_hull_entry(&seg).is_some())
-                    .and_then(|g| g.column_entry(&seg, false))
             };
-            match e {
-                Some(e) => {
-                    take_least(e, mv, found);
-                    hi.min(e.s - tie)
-                }
-                None => hi,
-            }
+            columns.visit(line, hi, f);
         };
-        match among {
-            Some(among) => columns.visit_among(among, line, hi, f),
-            None => columns.visit(line, hi, f),
-        }
-    };
     // `column_entry` over a group's laid-out columns: the same tests, in the same order.
     let column_listed = |line: &Line,
                          hi: f64,
                          found: &mut Option<(Entry, u32)>,
                          tests: &mut usize,
                          listed: &[ColumnListed]| {
-        let tie = 2e-9 * (1.0 + rr);
+        let tie = column_tie(rr);
         let mut hi = found.map_or(hi, |(e, _)| e.s) - tie;
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
         for c in listed {
@@ -1443,8 +1453,7 @@ fn measure_vectors(
                 continue;
             }
             *tests += 1;
-            let q = across(line.o + hi * line.n, c.k);
-            if clear_at_top(q - from_segment(q, c.a, c.d, c.inv_dd), line.n, rr * rr) {
+            if clear_of_column(line.o + hi * line.n, line.n, c.across, c.k, rr) {
                 continue;
             }
             let seg = Line { hi, ..*line };
@@ -1484,7 +1493,7 @@ fn measure_vectors(
             }
             hi
         });
-        column_entry(line, hi, &mut found, tests, None);
+        column_entry(line, hi, &mut found, tests);
         found
     };
     let facing_ok = |f: f64| facing == Facing::Any || f < 0.0;
@@ -1511,12 +1520,12 @@ fn measure_vectors(
         );
         Some((mv, a.tip + puck.r * a.axis, b.tip + puck.r * b.axis))
     };
-    // `among`: the items of `volumes` and of `columns` to search instead of each tree (a
-    // superset of those the vector's segment up to its seed's entry meets; see the tiles
-    // below), or `None` for a tree.
+    // `among`: the items of `volumes` to search instead of the tree (a superset of those the
+    // vector's segment up to its seed's entry meets; see the tiles below), or `None` for the
+    // tree; the columns likewise, laid out (`columns_listed`, see `column_listed`).
     // The entry of `v` into the seed's move (a move that cut a neighbour), if it faces
-    // right: it bounds the search from the start. It is met again in the search and changes
-    // nothing there.
+    // right: it bounds the search from the start. The search skips that move while it holds
+    // the best (its first entry is known).
     let seed_entry = |v: &Vector, (mv, c0, c1): (u32, DVec3, DVec3)| {
         let line = Line {
             o: v.o,
@@ -1531,7 +1540,7 @@ fn measure_vectors(
     // `seeded`: whether a seed was tried, and its entry (`seed_entry`).
     let direct_one = |v: &Vector,
                       seeded: (bool, Option<(Entry, u32)>),
-                      among: (Option<&[u32]>, Option<&[u32]>),
+                      among: Option<&[u32]>,
                       listed: Option<&[Listed]>,
                       pucks_listed: Option<&[PuckListed]>,
                       columns_listed: Option<&[ColumnListed]>|
@@ -1610,7 +1619,7 @@ fn measure_vectors(
                 }
                 found.map_or(hi, |(f, _)| f.s.min(hi))
             };
-            match (pucks_listed, among.0) {
+            match (pucks_listed, among) {
                 (Some(listed), _) => {
                     // `f` on the laid-out moves: the same tests in the same order.
                     let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
@@ -1650,7 +1659,7 @@ fn measure_vectors(
                 }
                 found.map_or(hi, |(f, _)| f.s.min(hi))
             };
-            match (listed, among.0) {
+            match (listed, among) {
                 (Some(listed), _) => {
                     let rr2 = rr * rr;
                     for c in listed {
@@ -1673,7 +1682,7 @@ fn measure_vectors(
         }
         match columns_listed {
             Some(cl) => column_listed(&line, v.hi, &mut found, &mut stats[1], cl),
-            None => column_entry(&line, v.hi, &mut found, &mut stats[1], among.1),
+            None => column_entry(&line, v.hi, &mut found, &mut stats[1]),
         }
         let Some((e, mv)) = found.filter(|(e, _)| facing_ok(e.normal.dot(v.n))) else {
             let dev = Deviation {
@@ -2041,7 +2050,7 @@ fn measure_vectors(
                                     let r = direct_one(
                                         v,
                                         (seed.is_some(), None),
-                                        (None, None),
+                                        None,
                                         None,
                                         None,
                                         None,
@@ -2096,17 +2105,20 @@ fn measure_vectors(
                             lay.extend(vols.iter().map(|&ci| Listed::of(&volumes, ci, rr)));
                             &lay[..]
                         });
-                        // The listed columns, likewise (all translations: a program whose
-                        // moves keep their axes is searched here).
-                        let column_moves = listed.1.then(|| {
-                            clay.clear();
-                            clay.extend(
-                                cols.iter()
-                                    .filter_map(|&ci| ColumnListed::of(&columns, ci, toolpath)),
-                            );
-                            &clay[..]
-                        });
-                        let column_moves = column_moves.filter(|c| c.len() == cols.len());
+                        // The listed columns, likewise. Every move of a program searched
+                        // here keeps its axis; were one not to, the group's vectors would
+                        // walk the column tree instead.
+                        let column_moves = listed
+                            .1
+                            .then(|| {
+                                clay.clear();
+                                clay.extend(
+                                    cols.iter()
+                                        .map_while(|&ci| ColumnListed::of(&columns, ci, toolpath)),
+                                );
+                                &clay[..]
+                            })
+                            .filter(|c| c.len() == cols.len());
                         // A bull's, likewise.
                         let bull_moves = (bull && listed.0).then(|| {
                             play.clear();
@@ -2117,8 +2129,7 @@ fn measure_vectors(
                             &play[..]
                         });
                         for &(i, b) in &pending {
-                            let among =
-                                (listed.0.then_some(&vols[..]), listed.1.then_some(&cols[..]));
+                            let among = listed.0.then_some(&vols[..]);
                             let r = direct_one(
                                 &chunk[i as usize],
                                 (true, Some(b)),
