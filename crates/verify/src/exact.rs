@@ -424,8 +424,9 @@ fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3, guess: f64) -> (f
         }
     }
     let (p_lo, p_hi) = (lo, hi);
-    // φ' at the bracket's ends once known (< 0 at `lo`, > 0 at `hi`).
-    let (mut f_lo, mut f_hi) = (None::<f64>, None::<f64>);
+    // φ' at the bracket's ends once known (< 0 at `lo`, > 0 at `hi`), NaN before: as
+    // `Option`s these cost the dome's bull program 0.5 % more instructions.
+    let (mut f_lo, mut f_hi) = (f64::NAN, f64::NAN);
     let mut u = if guess.is_finite() {
         guess.clamp(lo, hi)
     } else {
@@ -437,9 +438,9 @@ fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3, guess: f64) -> (f
             break;
         }
         if f1 > 0.0 {
-            (hi, f_hi) = (u, Some(f1));
+            (hi, f_hi) = (u, f1);
         } else {
-            (lo, f_lo) = (u, Some(f1));
+            (lo, f_lo) = (u, f1);
         }
         if hi <= lo {
             // At an end of the piece with the slope pointing out of it.
@@ -457,11 +458,14 @@ fn segment_disk_min(puck: &Puck, y: DVec3, d: DVec3, k: DVec3, guess: f64) -> (f
             // Newton leaves the bracket: an end of the piece not yet tried, else the secant
             // through the bracket's ends (the root is often right at one of them), else
             // its middle.
-            next = match (f_lo, f_hi) {
-                (None, _) if next <= lo => p_lo,
-                (_, None) if next >= hi => p_hi,
-                (Some(fl), Some(fh)) => lo - fl * (hi - lo) / (fh - fl),
-                _ => 0.5 * (lo + hi),
+            next = if f_lo.is_nan() && next <= lo {
+                p_lo
+            } else if f_hi.is_nan() && next >= hi {
+                p_hi
+            } else if !(f_lo.is_nan() || f_hi.is_nan()) {
+                lo - f_lo * (hi - lo) / (f_hi - f_lo)
+            } else {
+                0.5 * (lo + hi)
             };
             if !(next >= lo && next <= hi) {
                 next = 0.5 * (lo + hi);
