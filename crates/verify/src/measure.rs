@@ -158,8 +158,13 @@ const MEASURE_CHUNK: usize = 1 << 17;
 /// The interval of `s` where `line` lies within `r` of the range between `z0` and `z1` along
 /// the unit `k` (unbounded when the line runs across `k` inside it), if any.
 fn slab_interval(line: &Line, k: DVec3, z0: f64, z1: f64, r: f64) -> Option<(f64, f64)> {
+    slab_interval_at((line.o.dot(k), line.n.dot(k)), z0, z1, r)
+}
+
+/// [`slab_interval`] for the line's origin and direction seen along `k`: `(o·k, n·k)`.
+#[inline]
+fn slab_interval_at((q, nk): (f64, f64), z0: f64, z1: f64, r: f64) -> Option<(f64, f64)> {
     let (lo, hi) = (z0.min(z1) - r, z0.max(z1) + r);
-    let (q, nk) = (line.o.dot(k), line.n.dot(k));
     if nk == 0.0 {
         return (lo..=hi)
             .contains(&q)
@@ -1130,6 +1135,26 @@ fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -
     ta.min(tb).max_element().max(t0) <= ta.max(tb).min_element().min(t1)
 }
 
+/// [`segment_box`] for a line whose `inv` is finite in every axis (`finite`, decided once
+/// per line): then no product is NaN, and the test per box is its first path alone.
+#[inline(always)]
+fn segment_box_of(
+    finite: bool,
+    o: DVec3,
+    inv: DVec3,
+    min: DVec3,
+    max: DVec3,
+    t0: f64,
+    t1: f64,
+) -> bool {
+    if finite {
+        let (ta, tb) = ((min - o) * inv, (max - o) * inv);
+        ta.min(tb).max_element().max(t0) <= ta.max(tb).min_element().min(t1)
+    } else {
+        segment_box(o, inv, min, max, t0, t1)
+    }
+}
+
 /// [`segment_box`] axis by axis, a line parallel to a slab (infinite `inv`) inside it or
 /// nowhere.
 fn segment_box_axes(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> bool {
@@ -1448,8 +1473,9 @@ fn measure_vectors(
         let tie = column_tie(rr);
         let mut hi = found.map_or(hi, |(e, _)| e.s) - tie;
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        let finite = inv.is_finite();
         for c in listed {
-            if !segment_box(line.o, inv, c.bl, c.bh, line.lo, hi) {
+            if !segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi) {
                 continue;
             }
             *tests += 1;
@@ -1623,15 +1649,19 @@ fn measure_vectors(
                 (Some(listed), _) => {
                     // `f` on the laid-out moves: the same tests in the same order.
                     let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+                    let finite = inv.is_finite();
+                    // The line seen along the programme's one axis, if it has one.
+                    let along = common_axis.map(|k| (line.o.dot(k), line.n.dot(k)));
                     for c in listed {
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                        if !segment_box(line.o, inv, c.bl, c.bh, line.lo, hi) {
+                        if !segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi) {
                             continue;
                         }
                         if !meets_sphere(&line, hi, c.mid, c.rho2) {
                             continue;
                         }
-                        let Some((s0, s1)) = slab_interval(&line, c.k, c.z0, c.z1, puck.r) else {
+                        let seen = along.unwrap_or_else(|| (line.o.dot(c.k), line.n.dot(c.k)));
+                        let Some((s0, s1)) = slab_interval_at(seen, c.z0, c.z1, puck.r) else {
                             continue;
                         };
                         let (s0, s1) = (line.lo.max(s0), hi.min(s1));
