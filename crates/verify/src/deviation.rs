@@ -281,6 +281,55 @@ impl TriangleBvh {
     }
 }
 
+impl TriangleBvh {
+    /// Whether some triangle lies nearer to `p` than `r` (mm): the answer of
+    /// [`TriangleBvh::nearest_within`]`(p, r).is_some()`, by the same distance and the same
+    /// boxes, stopping at the first such triangle and passing over those whose plane alone
+    /// lies farther than `r` by more than rounding (the distance to a triangle is never less
+    /// than to its plane). A point just under a large flat face (a gouge read a micrometre
+    /// deep in a plate) meets many boxes of coplanar triangles; the plane tells each apart in
+    /// a few products.
+    pub fn any_within(&self, p: DVec3, r: f64) -> bool {
+        if self.tris.is_empty() || r.is_nan() || r <= 0.0 {
+            return false;
+        }
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = self.nodes[stack[top] as usize];
+            let gap = (n.min - p).max(p - n.max).max(DVec3::ZERO);
+            if gap.length() >= r {
+                continue;
+            }
+            if n.count > 0 {
+                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
+                    if !beyond_plane(p, t, r) && distance_to_triangle(p, t) < r {
+                        return true;
+                    }
+                }
+            } else {
+                stack[top] = n.first + 1;
+                stack[top + 1] = n.first;
+                top += 2;
+            }
+        }
+        false
+    }
+}
+
+/// Whether `p` lies farther than `r` from the plane of triangle `t`, by more than the
+/// rounding of either distance (1e-12 of the coordinates' size; a degenerate triangle has no
+/// plane and is never beyond it).
+fn beyond_plane(p: DVec3, t: &Triangle, r: f64) -> bool {
+    let [a, b, c] = t.v;
+    let n = (b - a).cross(c - a);
+    let w = p - a;
+    let h = n.dot(w);
+    let m = r + 1e-12 * (1.0 + w.abs().max_element());
+    h * h > m * m * n.length_squared()
+}
+
 /// The distance (mm) from `p` to triangle `t`, as [`TriangleBvh::nearest_within`] measures
 /// it.
 pub(crate) fn distance_to_triangle(p: DVec3, t: &Triangle) -> f64 {

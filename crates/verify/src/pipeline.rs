@@ -292,7 +292,7 @@ fn crease_depths(
         design
             .get(own[i] as usize)
             .is_some_and(|t| crate::deviation::distance_to_triangle(p, t) < r)
-            || part.nearest_within(p, r).is_some()
+            || part.any_within(p, r)
     };
     let crease = CREASE_DEG.to_radians().cos();
     let sharp = |i: usize| cos_min[i] < crease || on_rim[i];

@@ -422,6 +422,54 @@ fn imprint_sweep_agrees_with_zmap_within_chord_sag() {
     }
 }
 
+/// `TriangleBvh::any_within` against `nearest_within`: the same answer for points at, just
+/// inside and just outside the nearest distance, on and beside a tessellated plane (whose
+/// coplanar faces `any_within` passes over by their plane) and a tilted fan.
+#[test]
+fn any_within_answers_as_nearest_within() {
+    use cam_verify::deviation::TriangleBvh;
+    let mut rng = Lcg(0x9e37_79b9_7f4a_7c15);
+    // A 10 x 10 mm plate in 200 faces at z = 0, and a fan leaning over it.
+    let mut tris = Vec::new();
+    for i in 0..10 {
+        for j in 0..10 {
+            let (x, y) = (i as f64, j as f64);
+            let q = |dx: f64, dy: f64| DVec3::new(x + dx, y + dy, 0.0);
+            tris.push(Triangle::new(q(0.0, 0.0), q(1.0, 0.0), q(1.0, 1.0)));
+            tris.push(Triangle::new(q(0.0, 0.0), q(1.0, 1.0), q(0.0, 1.0)));
+        }
+    }
+    tris.extend(fan(DVec3::new(5.0, 5.0, 3.0), 0.5));
+    let bvh = TriangleBvh::new(&tris);
+    let mut checked = 0;
+    for k in 0..3000 {
+        let p = DVec3::new(
+            12.0 * rng.next() - 1.0,
+            12.0 * rng.next() - 1.0,
+            // Most a hair under or over the plate, as a gouge's entry point lies.
+            if k % 3 == 0 {
+                4.0 * rng.next() - 1.0
+            } else {
+                (rng.next() - 0.5) * 10f64.powf(-6.0 * rng.next())
+            },
+        );
+        let d = bvh.nearest_within(p, 100.0).expect("within 100 mm");
+        for r in [
+            d,
+            d * (1.0 + 1e-12),
+            d * (1.0 - 1e-12),
+            d * 1.5,
+            d * 0.5,
+            p.z.abs() * (1.0 - 1e-6),
+        ] {
+            let want = bvh.nearest_within(p, r).is_some();
+            assert_eq!(bvh.any_within(p, r), want, "{p} r = {r} (nearest {d})");
+            checked += usize::from(want);
+        }
+    }
+    assert!(checked > 3000, "too few points within r: {checked}");
+}
+
 /// `TriangleBvh::nearest_within` against a dense sampling of each triangle: never farther
 /// than the nearest sample, never nearer than it minus the sampling step.
 #[test]
