@@ -123,15 +123,29 @@ const ROOT_TOL_MM: f64 = 1e-12;
 fn first_root_convex(
     lo: f64,
     hi: f64,
+    f: impl FnMut(f64) -> (f64, DVec3),
+    n: DVec3,
+) -> Option<(f64, DVec3)> {
+    first_root_from(lo, lo, hi, f, n)
+}
+
+/// [`first_root_convex`] from `start ∈ [lo, hi]`, a point known to lie at or before the
+/// first root (`f(start) ≥ 0` and `f` falling there, or `start = lo`). Inside at `start`,
+/// the root is `start`: with the normal `−n` at `lo` (the line starts inside), else the
+/// gradient there (`start` lies on the surface).
+fn first_root_from(
+    lo: f64,
+    start: f64,
+    hi: f64,
     mut f: impl FnMut(f64) -> (f64, DVec3),
     n: DVec3,
 ) -> Option<(f64, DVec3)> {
-    let mut s = lo;
+    let mut s = start;
     let (mut v, mut g) = f(s);
     // Within the tolerance counts as inside, as for the iterates below (a set without
     // thickness is never at distance exactly 0 from a computed point).
     if v <= ROOT_TOL_MM {
-        return Some((lo, -n));
+        return Some((start, if start > lo { g } else { -n }));
     }
     for _ in 0..NEWTON_ITERS {
         let slope = g.dot(n);
@@ -632,20 +646,33 @@ pub fn convex_translation_entry(
     // rising there, the line is outside over the whole segment (it passes the puck beyond
     // `hi`, or enters it later). One evaluation in place of the walk up from `lo`, for the
     // many moves a search tries below a bound they cannot beat.
+    //
+    // Inside at `hi` with the distance falling there, the tangent there (which the convex
+    // distance never passes below) reaches `r` at or before the first root: Newton's
+    // method starts there, with the minimiser found at `hi`, instead of at `lo` (callgrind:
+    // dome bull 6.79 -> 6.57 G, sphere_on_plate bull 9.26 -> 8.97 G; the entries move
+    // within the method's 1e-12 mm).
+    let (mut start, mut guess) = (line.lo, 0.5);
     if line.hi.is_finite() && line.hi > line.lo {
-        let (dist, g, _) = segment_disk_min(puck, line.at(line.hi) - c0, d, k, 0.5);
-        if dist - puck.r > ROOT_TOL_MM && g.dot(line.n) <= 0.0 {
+        let (dist, g, u) = segment_disk_min(puck, line.at(line.hi) - c0, d, k, 0.5);
+        let (v, slope) = (dist - puck.r, g.dot(line.n));
+        if v > ROOT_TOL_MM && slope <= 0.0 {
             return None;
+        }
+        if v <= 0.0 && slope < 0.0 {
+            let s = line.hi - v / slope;
+            if s > line.lo {
+                (start, guess) = (s, u);
+            }
         }
     }
     // Along the line the minimiser moves little from one Newton iterate to the next.
-    let mut guess = 0.5;
     let f = |s: f64| {
         let (dist, g, u) = segment_disk_min(puck, line.at(s) - c0, d, k, guess);
         guess = u;
         (dist - puck.r, g)
     };
-    first_root_convex(line.lo, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
+    first_root_from(line.lo, start, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
 /// The entry of `line` through the flat bottom of the puck swept by a translation (centres
