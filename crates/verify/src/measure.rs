@@ -1559,9 +1559,13 @@ fn measure_vectors(
             lo: v.lo,
             hi: v.hi,
         };
-        entry_of(&line, mv, c0, c1)
-            .filter(|e| facing_ok(e.normal.dot(v.n)))
-            .map(|e| (e, mv))
+        // A bull's without the test at the segment's top (see `exact::convex_entry`).
+        let e = if bull {
+            crate::exact::convex_entry(&line, &puck, (c0, c1), axis_of(mv), false)
+        } else {
+            entry_of(&line, mv, c0, c1)
+        };
+        e.filter(|e| facing_ok(e.normal.dot(v.n))).map(|e| (e, mv))
     };
     // `seeded`: whether a seed was tried, and its entry (`seed_entry`).
     let direct_one = |v: &Vector,
