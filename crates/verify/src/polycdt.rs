@@ -80,30 +80,80 @@ impl PolyCdt {
         {
             return None;
         }
-        // The points of each side in order: each splits the hull edge from the previous
-        // point to the side's end corner.
+        // The first side's points in order from `c0`, each splitting the hull edge from the
+        // previous one to `c1`. Then the other two sides' points climb towards `c2`
+        // together, the second's from `c1`, the third's from `c0` (against the polygon's
+        // order), by the fraction of their side: the polygon above them stays one triangle
+        // with `c2`, and each split flips a few edges near it. Side by side, each point of
+        // a later side flipped the long triangles the earlier sides had made, some 25
+        // each on a large face (sphere_on_plate's plate).
         let n = boundary.len();
-        for (from, to) in [(c0, c1), (c1, c2), (c2, n)] {
-            let end = (to % n) as u32;
-            // The hull edge to split: in the triangle the previous split made (flips about
-            // the new point keep it there), else searched for.
-            let mut at = (0, 0);
-            for i in from + 1..to {
-                let (t, k) = if cdt.has_hull_edge(at, i as u32 - 1, end) {
-                    at
-                } else {
-                    cdt.hull_edge(i as u32 - 1, end)?
-                };
-                let t1 = cdt.tris.len() as u32;
-                cdt.split_edge(t, k, i as u32)?;
-                cdt.legalize();
-                // The split's second triangle held the new hull edge from the new point.
-                at = (0..3)
-                    .find(|&k| cdt.has_hull_edge((t1, k), i as u32, end))
-                    .map_or((0, 0), |k| (t1, k));
+        let mut at = (0, 0);
+        for i in c0 + 1..c1 {
+            let i = i as u32;
+            cdt.split_hull(&mut at, (i - 1, c1 as u32), i, (i, c1 as u32))?;
+        }
+        let (m2, m3) = (c2 - c1 - 1, n - c2 - 1);
+        let (mut i2, mut i3) = (0usize, 0usize);
+        let (mut at2, mut at3) = ((0, 0), (0, 0));
+        let apex = c2 as u32;
+        while i2 < m2 || i3 < m3 {
+            let second = i3 == m3 || (i2 < m2 && (i2 + 1) * (m3 + 1) <= (i3 + 1) * (m2 + 1));
+            if second {
+                let i = (c1 + 1 + i2) as u32;
+                cdt.split_hull(&mut at2, (i - 1, apex), i, (i, apex))?;
+                i2 += 1;
+            } else {
+                let j = (n - 1 - i3) as u32;
+                let below = if i3 == 0 { c0 as u32 } else { j + 1 };
+                cdt.split_hull(&mut at3, (apex, below), j, (apex, j))?;
+                i3 += 1;
             }
         }
         Some(())
+    }
+
+    /// Splits the directed hull edge `a → b` at the point `i` on it and flips what is not
+    /// locally Delaunay. The edge is looked for in `at` (edge index included), then in its
+    /// triangle's neighbours (a flip may have moved it there), then everywhere; afterwards
+    /// `at` holds the hull edge `next` (one of the two the split made), or `(0, 0)`.
+    fn split_hull(
+        &mut self,
+        at: &mut (u32, usize),
+        (a, b): (u32, u32),
+        i: u32,
+        next: (u32, u32),
+    ) -> Option<()> {
+        let (t, k) = self.find_hull_edge(*at, a, b)?;
+        let t1 = self.tris.len() as u32;
+        self.split_edge(t, k, i)?;
+        self.legalize();
+        *at = [t, t1]
+            .into_iter()
+            .flat_map(|u| (0..3).map(move |k| (u, k)))
+            .find(|&h| self.has_hull_edge(h, next.0, next.1))
+            .unwrap_or((0, 0));
+        Some(())
+    }
+
+    /// The directed hull edge `a → b`: at `near`, in a neighbour of its triangle, or
+    /// searched for.
+    fn find_hull_edge(&self, near: (u32, usize), a: u32, b: u32) -> Option<(u32, usize)> {
+        if self.has_hull_edge(near, a, b) {
+            return Some(near);
+        }
+        let t = near.0 as usize;
+        if t < self.tris.len() {
+            for u in self.adj[t] {
+                if u == NONE {
+                    continue;
+                }
+                if let Some(k) = (0..3).find(|&k| self.has_hull_edge((u, k), a, b)) {
+                    return Some((u, k));
+                }
+            }
+        }
+        self.hull_edge(a, b)
     }
 
     /// Whether edge `k` of triangle `t` is the directed hull edge `a → b`.
