@@ -318,6 +318,156 @@ impl TriangleBvh {
     }
 }
 
+/// Triangles binned in a uniform grid of cubes, each listed in every cube its box meets: for
+/// [`TriangleGrid::any_within`] at radii small against a cube, where a tree's boxes answer
+/// poorly on parts with large faces (each large face's box spans the tree: on
+/// sphere_on_plate a query walked some 100 boxes).
+pub struct TriangleGrid<'a> {
+    tris: &'a [Triangle],
+    lo: DVec3,
+    inv: f64,
+    dims: [usize; 3],
+    /// Per cube (x fastest), where its triangles start in `items`; one more at the end.
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+/// The most cubes a [`TriangleGrid`] query looks into; beyond, it leaves the answer to the
+/// caller.
+const GRID_QUERY_CELLS: usize = 64;
+
+impl<'a> TriangleGrid<'a> {
+    /// The grid of `tris`: cubes the median triangle's box size (at least 1/256 of the
+    /// part's box), `None` when empty or when the listing would exceed 16 entries per
+    /// triangle (and a million).
+    pub fn new(tris: &'a [Triangle]) -> Option<TriangleGrid<'a>> {
+        let boxes: Vec<(DVec3, DVec3)> = tris
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.v;
+                (a.min(b).min(c), a.max(b).max(c))
+            })
+            .collect();
+        let (lo, hi) = boxes.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(l, h), &(a, b)| (l.min(a), h.max(b)),
+        );
+        if boxes.is_empty() || !(lo.is_finite() && hi.is_finite()) {
+            return None;
+        }
+        let mut sizes: Vec<f64> = boxes.iter().map(|(a, b)| (*b - *a).max_element()).collect();
+        let mid = sizes.len() / 2;
+        let median = *sizes.select_nth_unstable_by(mid, f64::total_cmp).1;
+        let cell = median.max((hi - lo).max_element() / 256.0);
+        if !(cell > 0.0 && cell.is_finite()) {
+            return None;
+        }
+        let inv = 1.0 / cell;
+        let dim = |e: f64| ((e * inv).floor() as usize).saturating_add(1);
+        let dims = [dim(hi.x - lo.x), dim(hi.y - lo.y), dim(hi.z - lo.z)];
+        let cells = dims[0].checked_mul(dims[1])?.checked_mul(dims[2])?;
+        let cap = 16 * tris.len() + (1 << 20);
+        if cells > cap {
+            return None;
+        }
+        let range = |a: DVec3, b: DVec3| {
+            let f = |x: f64, d: usize| ((x * inv).floor().max(0.0) as usize).min(d - 1);
+            let l = [
+                f(a.x - lo.x, dims[0]),
+                f(a.y - lo.y, dims[1]),
+                f(a.z - lo.z, dims[2]),
+            ];
+            let h = [
+                f(b.x - lo.x, dims[0]),
+                f(b.y - lo.y, dims[1]),
+                f(b.z - lo.z, dims[2]),
+            ];
+            (l, h)
+        };
+        let span =
+            |(l, h): ([usize; 3], [usize; 3])| (0..3).map(|i| h[i] - l[i] + 1).product::<usize>();
+        let total: usize = boxes.iter().map(|&(a, b)| span(range(a, b))).sum();
+        if total > cap {
+            return None;
+        }
+        let mut count = vec![0u32; cells + 1];
+        let each = |(l, h): ([usize; 3], [usize; 3]), f: &mut dyn FnMut(usize)| {
+            for z in l[2]..=h[2] {
+                for y in l[1]..=h[1] {
+                    for x in l[0]..=h[0] {
+                        f((z * dims[1] + y) * dims[0] + x);
+                    }
+                }
+            }
+        };
+        for &(a, b) in &boxes {
+            each(range(a, b), &mut |c| count[c + 1] += 1);
+        }
+        for c in 0..cells {
+            count[c + 1] += count[c];
+        }
+        let start = count.clone();
+        let mut items = vec![0u32; total];
+        for (i, &(a, b)) in boxes.iter().enumerate() {
+            each(range(a, b), &mut |c| {
+                items[count[c] as usize] = i as u32;
+                count[c] += 1;
+            });
+        }
+        Some(TriangleGrid {
+            tris,
+            lo,
+            inv,
+            dims,
+            start,
+            items,
+        })
+    }
+
+    /// [`TriangleBvh::any_within`] for the same triangles, from the cubes the box of the
+    /// ball about `p` (radius `r`, padded for rounding) meets; `None` when that box meets
+    /// more than [`GRID_QUERY_CELLS`] cubes (ask the tree). A triangle nearer than `r`
+    /// lists itself in a cube holding its nearest point, which that box meets.
+    pub fn any_within(&self, p: DVec3, r: f64) -> Option<bool> {
+        if r.is_nan() || r <= 0.0 {
+            return Some(false);
+        }
+        let pad = r * (1.0 + 1e-9) + 1e-9 * (1.0 + p.abs().max_element());
+        let (a, b) = (p - pad - self.lo, p + pad - self.lo);
+        let d = self.dims;
+        let mut l = [0usize; 3];
+        let mut h = [0usize; 3];
+        for i in 0..3 {
+            let (x0, x1) = (a[i] * self.inv, b[i] * self.inv);
+            if !(x0.is_finite() && x1.is_finite()) {
+                return None;
+            }
+            if x1 < 0.0 || x0 >= d[i] as f64 {
+                return Some(false);
+            }
+            l[i] = (x0.floor().max(0.0) as usize).min(d[i] - 1);
+            h[i] = (x1.floor().max(0.0) as usize).min(d[i] - 1);
+        }
+        if (0..3).map(|i| h[i] - l[i] + 1).product::<usize>() > GRID_QUERY_CELLS {
+            return None;
+        }
+        for z in l[2]..=h[2] {
+            for y in l[1]..=h[1] {
+                for x in l[0]..=h[0] {
+                    let c = (z * d[1] + y) * d[0] + x;
+                    for &i in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
+                        let t = &self.tris[i as usize];
+                        if !beyond_plane(p, t, r) && distance_to_triangle(p, t) < r {
+                            return Some(true);
+                        }
+                    }
+                }
+            }
+        }
+        Some(false)
+    }
+}
+
 /// Whether `p` lies farther than `r` from the plane of triangle `t`, by more than the
 /// rounding of either distance (1e-12 of the coordinates' size; a degenerate triangle has no
 /// plane and is never beyond it).

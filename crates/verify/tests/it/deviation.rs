@@ -422,9 +422,10 @@ fn imprint_sweep_agrees_with_zmap_within_chord_sag() {
     }
 }
 
-/// `TriangleBvh::any_within` against `nearest_within`: the same answer for points at, just
-/// inside and just outside the nearest distance, on and beside a tessellated plane (whose
-/// coplanar faces `any_within` passes over by their plane) and a tilted fan.
+/// `TriangleBvh::any_within` and `TriangleGrid::any_within` against `nearest_within`: the
+/// same answer for points at, just inside and just outside the nearest distance, on and
+/// beside a tessellated plane (whose coplanar faces `any_within` passes over by their plane)
+/// and a tilted fan.
 #[test]
 fn any_within_answers_as_nearest_within() {
     use cam_verify::deviation::TriangleBvh;
@@ -441,7 +442,8 @@ fn any_within_answers_as_nearest_within() {
     }
     tris.extend(fan(DVec3::new(5.0, 5.0, 3.0), 0.5));
     let bvh = TriangleBvh::new(&tris);
-    let mut checked = 0;
+    let grid = cam_verify::deviation::TriangleGrid::new(&tris).expect("a grid for 204 faces");
+    let (mut checked, mut by_grid) = (0, 0);
     for k in 0..3000 {
         let p = DVec3::new(
             12.0 * rng.next() - 1.0,
@@ -464,10 +466,15 @@ fn any_within_answers_as_nearest_within() {
         ] {
             let want = bvh.nearest_within(p, r).is_some();
             assert_eq!(bvh.any_within(p, r), want, "{p} r = {r} (nearest {d})");
+            if let Some(g) = grid.any_within(p, r) {
+                assert_eq!(g, want, "grid: {p} r = {r} (nearest {d})");
+                by_grid += 1;
+            }
             checked += usize::from(want);
         }
     }
     assert!(checked > 3000, "too few points within r: {checked}");
+    assert!(by_grid > 9000, "too few answered by the grid: {by_grid}");
 }
 
 /// `TriangleBvh::nearest_within` against a dense sampling of each triangle: never farther
