@@ -426,7 +426,7 @@ impl<'a> TriangleGrid<'a> {
 
     /// [`TriangleBvh::any_within`] for the same triangles, from the cubes the box of the
     /// ball about `p` (radius `r`, padded for rounding) meets; `None` when that box meets
-    /// more than [`GRID_QUERY_CELLS`] cubes (ask the tree). A triangle nearer than `r`
+    /// more than 64 cubes (ask the tree). A triangle nearer than `r`
     /// lists itself in a cube holding its nearest point, which that box meets.
     pub fn any_within(&self, p: DVec3, r: f64) -> Option<bool> {
         if r.is_nan() || r <= 0.0 {
