@@ -254,22 +254,37 @@ impl TriangleBvh {
     /// The distance (mm) from `p` to the nearest triangle, when some triangle is nearer
     /// than `r`; `None` otherwise. Boxes farther than the best so far are pruned.
     pub fn nearest_within(&self, p: DVec3, r: f64) -> Option<f64> {
-        if self.tris.is_empty() || r.is_nan() || r <= 0.0 {
-            return None;
-        }
         let mut best = r;
+        self.walk_near(p, r, |t| {
+            best = best.min(distance_to_triangle(p, t));
+            Some(best)
+        });
+        (best < r).then_some(best)
+    }
+
+    /// Calls `f` on each triangle of the leaves whose boxes lie nearer to `p` than the
+    /// current radius: `r` at first, then what `f` returns; `None` stops the walk. Nothing
+    /// when empty or `r` is not positive.
+    fn walk_near(&self, p: DVec3, r: f64, mut f: impl FnMut(&Triangle) -> Option<f64>) {
+        if self.tris.is_empty() || r.is_nan() || r <= 0.0 {
+            return;
+        }
+        let mut r = r;
         let mut stack = [0u32; 64];
         let mut top = 1;
         while top > 0 {
             top -= 1;
             let n = self.nodes[stack[top] as usize];
             let gap = (n.min - p).max(p - n.max).max(DVec3::ZERO);
-            if gap.length() >= best {
+            if gap.length() >= r {
                 continue;
             }
             if n.count > 0 {
                 for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
-                    best = best.min(distance_to_triangle(p, t));
+                    match f(t) {
+                        Some(next) => r = next,
+                        None => return,
+                    }
                 }
             } else {
                 stack[top] = n.first + 1;
@@ -277,7 +292,6 @@ impl TriangleBvh {
                 top += 2;
             }
         }
-        (best < r).then_some(best)
     }
 }
 
@@ -290,31 +304,12 @@ impl TriangleBvh {
     /// deep in a plate) meets many boxes of coplanar triangles; the plane tells each apart in
     /// a few products.
     pub fn any_within(&self, p: DVec3, r: f64) -> bool {
-        if self.tris.is_empty() || r.is_nan() || r <= 0.0 {
-            return false;
-        }
-        let mut stack = [0u32; 64];
-        let mut top = 1;
-        while top > 0 {
-            top -= 1;
-            let n = self.nodes[stack[top] as usize];
-            let gap = (n.min - p).max(p - n.max).max(DVec3::ZERO);
-            if gap.length() >= r {
-                continue;
-            }
-            if n.count > 0 {
-                for t in &self.tris[n.first as usize..(n.first + n.count) as usize] {
-                    if !beyond_plane(p, t, r) && distance_to_triangle(p, t) < r {
-                        return true;
-                    }
-                }
-            } else {
-                stack[top] = n.first + 1;
-                stack[top + 1] = n.first;
-                top += 2;
-            }
-        }
-        false
+        let mut found = false;
+        self.walk_near(p, r, |t| {
+            found = nearer_than(p, t, r);
+            (!found).then_some(r)
+        });
+        found
     }
 }
 
@@ -456,8 +451,7 @@ impl<'a> TriangleGrid<'a> {
                 for x in l[0]..=h[0] {
                     let c = (z * d[1] + y) * d[0] + x;
                     for &i in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
-                        let t = &self.tris[i as usize];
-                        if !beyond_plane(p, t, r) && distance_to_triangle(p, t) < r {
+                        if nearer_than(p, &self.tris[i as usize], r) {
                             return Some(true);
                         }
                     }
@@ -466,6 +460,13 @@ impl<'a> TriangleGrid<'a> {
         }
         Some(false)
     }
+}
+
+/// Whether triangle `t` lies nearer to `p` than `r` by [`distance_to_triangle`], passing
+/// over it first when its plane alone lies farther ([`beyond_plane`]).
+#[inline]
+fn nearer_than(p: DVec3, t: &Triangle, r: f64) -> bool {
+    !beyond_plane(p, t, r) && distance_to_triangle(p, t) < r
 }
 
 /// Whether `p` lies farther than `r` from the plane of triangle `t`, by more than the

@@ -1132,6 +1132,12 @@ fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -
     if (ta.is_nan_mask() | tb.is_nan_mask()).any() {
         return segment_box_axes(o, inv, min, max, t0, t1);
     }
+    slabs_meet(ta, tb, t0, t1)
+}
+
+/// Whether the slabs' intervals `ta..tb` (per axis, either order) and `t0..t1` share a point.
+#[inline(always)]
+fn slabs_meet(ta: DVec3, tb: DVec3, t0: f64, t1: f64) -> bool {
     ta.min(tb).max_element().max(t0) <= ta.max(tb).min_element().min(t1)
 }
 
@@ -1148,8 +1154,7 @@ fn segment_box_of(
     t1: f64,
 ) -> bool {
     if finite {
-        let (ta, tb) = ((min - o) * inv, (max - o) * inv);
-        ta.min(tb).max_element().max(t0) <= ta.max(tb).min_element().min(t1)
+        slabs_meet((min - o) * inv, (max - o) * inv, t0, t1)
     } else {
         segment_box(o, inv, min, max, t0, t1)
     }
