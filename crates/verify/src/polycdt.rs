@@ -85,8 +85,9 @@ impl PolyCdt {
         // together, the second's from `c1`, the third's from `c0` (against the polygon's
         // order), by the fraction of their side: the polygon above them stays one triangle
         // with `c2`, and each split flips a few edges near it. Side by side, each point of
-        // a later side flipped the long triangles the earlier sides had made, some 25
-        // each on a large face (sphere_on_plate's plate).
+        // a later side flipped the long triangles the earlier sides had made: on
+        // sphere_on_plate's large plate faces 3.7-4.6 k instructions of flipping per point
+        // (callgrind).
         let n = boundary.len();
         let mut at = (0, 0);
         for i in c0 + 1..c1 {
