@@ -548,15 +548,21 @@ impl TriangleBvh {
         }
         let inv = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
         let mut best: Option<Hit> = None;
-        let mut stack = [0u32; 64];
+        let root = &self.nodes[0];
+        let e = slab_entry(origin, inv, root.min, root.max, t0, t1)?;
+        // Each node with where the segment enters its box, tested once (by its parent):
+        // the box still meets the segment when that entry lies before the best crossing.
+        let mut stack = [(0u32, 0f64); 64];
+        stack[0] = (0, e);
         let mut top = 1;
         while top > 0 {
             top -= 1;
-            let n = self.nodes[stack[top] as usize];
+            let (ni, e) = stack[top];
             let hi = best.map_or(t1, |b| b.t);
-            if slab_entry(origin, inv, n.min, n.max, t0, hi).is_none() {
+            if e > hi {
                 continue;
             }
+            let n = self.nodes[ni as usize];
             if n.count > 0 {
                 for k in n.first as usize..(n.first + n.count) as usize {
                     let ti = self.order[k];
@@ -571,31 +577,24 @@ impl TriangleBvh {
                     }
                 }
             } else {
-                let (l, r) = (n.first, n.first + 1);
-                let el = slab_entry(
-                    origin,
-                    inv,
-                    self.nodes[l as usize].min,
-                    self.nodes[l as usize].max,
-                    t0,
-                    hi,
-                );
-                let er = slab_entry(
-                    origin,
-                    inv,
-                    self.nodes[r as usize].min,
-                    self.nodes[r as usize].max,
-                    t0,
-                    hi,
-                );
-                // Push the farther child first so the nearer one is visited first.
-                let (first, second) = match (el, er) {
-                    (Some(a), Some(b)) if b < a => (l, r),
-                    _ => (r, l),
+                let entry = |c: u32| {
+                    let m = &self.nodes[c as usize];
+                    slab_entry(origin, inv, m.min, m.max, t0, hi).map(|e| (c, e))
                 };
-                stack[top] = first;
-                stack[top + 1] = second;
-                top += 2;
+                // The nearer child is visited first (pushed last).
+                match (entry(n.first), entry(n.first + 1)) {
+                    (Some(l), Some(r)) => {
+                        let (near, far) = if r.1 < l.1 { (r, l) } else { (l, r) };
+                        stack[top] = far;
+                        stack[top + 1] = near;
+                        top += 2;
+                    }
+                    (Some(c), None) | (None, Some(c)) => {
+                        stack[top] = c;
+                        top += 1;
+                    }
+                    (None, None) => {}
+                }
             }
         }
         best
