@@ -9,11 +9,19 @@
 //! constraints, and no triangle ever lies outside the polygon, even where rounding puts an
 //! edge point a hair off its side. Where the Delaunay triangulation is unique (no four
 //! points on one empty circle) the result is the constrained Delaunay triangulation spade
-//! builds, at a fraction of its cost for the few dozen points of a typical face; a point
+//! builds, at a fraction of its cost for the few dozen points of a typical face; where it
+//! is not, ties are broken by the points' coordinates (see `PolyCdt::first_of`), so the
+//! result does not depend on the order the points came in; a point
 //! that cannot be placed (a duplicate, or one outside the polygon) makes the whole
 //! triangulation fail and the caller falls back to spade.
 
+use std::collections::HashMap;
+use std::hash::BuildHasherDefault;
+
 use robust::{Coord, incircle, orient2d};
+
+/// Directed edges `a << 32 | b` and where they lie: (triangle, edge index).
+type EdgeMap = HashMap<u64, (u32, usize), BuildHasherDefault<crate::refine::IntHasher>>;
 
 /// No neighbour across an edge: a side of the polygon.
 const NONE: u32 = u32::MAX;
@@ -29,6 +37,9 @@ pub(crate) struct PolyCdt {
     last: u32,
     /// Edges waiting for the Delaunay test: (triangle, edge index).
     stack: Vec<(u32, usize)>,
+    /// Scratch for [`PolyCdt::reset_lattice`]: directed edges `a << 32 | b` waiting for
+    /// their reverse, with their triangle and edge index.
+    open: EdgeMap,
 }
 
 fn coord(p: [f64; 2]) -> Coord<f64> {
@@ -112,6 +123,167 @@ impl PolyCdt {
             }
         }
         Some(())
+    }
+
+    /// Makes this the triangulation of the polygon `boundary` (corners as for
+    /// [`PolyCdt::reset`]) and the points `lattice`, laid out in `rows` (ranges of
+    /// `lattice`, one after another, covering it): each row at least two points on one
+    /// horizontal line, left to right, each row above the one before. Built without a
+    /// search: the strips between neighbouring rows are zipped, the band between the
+    /// polygon and the rows' outline is zipped (each triangle checked counter-clockwise on
+    /// exact predicates, which makes the band a triangulation), and Lawson flips then make
+    /// every edge locally Delaunay, which the rows' inner edges already are. The result is
+    /// the constrained Delaunay triangulation, as inserting the points one by one gives
+    /// wherever that is unique. `None` (the triangulation is then unusable) when the rows
+    /// are not laid out so or the band cannot be zipped; `room` more points may follow.
+    ///
+    /// Inserting a lattice point by point cost some 4 k instructions a point (the walk,
+    /// the split and the flips of its long triangles to the polygon's sides).
+    pub(crate) fn reset_lattice(
+        &mut self,
+        boundary: &[[f64; 2]],
+        corners: [usize; 3],
+        lattice: &[[f64; 2]],
+        rows: &[(usize, usize)],
+        room: usize,
+    ) -> Option<()> {
+        let nb = boundary.len();
+        let [c0, c1, c2] = corners;
+        if c0 != 0 || !(c0 < c1 && c1 < c2 && c2 < nb) || rows.len() < 2 {
+            return None;
+        }
+        if orient2d(
+            coord(boundary[c0]),
+            coord(boundary[c1]),
+            coord(boundary[c2]),
+        ) <= 0.0
+        {
+            return None;
+        }
+        let mut next = 0;
+        let mut below = f64::NEG_INFINITY;
+        for &(s, e) in rows {
+            if s != next || e < s + 2 || e > lattice.len() {
+                return None;
+            }
+            let y = lattice[s][1];
+            if y.partial_cmp(&below) != Some(std::cmp::Ordering::Greater)
+                || lattice[s..e].windows(2).any(|w| {
+                    w[1][1] != y
+                        || w[1][0].partial_cmp(&w[0][0]) != Some(std::cmp::Ordering::Greater)
+                })
+            {
+                return None;
+            }
+            (next, below) = (e, y);
+        }
+        if next != lattice.len() {
+            return None;
+        }
+        let n = nb + lattice.len() + room;
+        self.pts.clear();
+        self.pts.reserve(n);
+        self.pts.extend_from_slice(boundary);
+        self.pts.extend_from_slice(lattice);
+        self.tris.clear();
+        self.tris.reserve(2 * n);
+        self.adj.clear();
+        self.stack.clear();
+        self.last = 0;
+        let id = |i: usize| (nb + i) as u32;
+        // The strips: rows merged by x, each triangle an edge of one row and a point of the
+        // other (counter-clockwise, the rows being horizontal and ordered).
+        for w in rows.windows(2) {
+            let ((mut i, be), (mut k, te)) = (w[0], w[1]);
+            while i + 1 < be || k + 1 < te {
+                let bottom = k + 1 == te || (i + 1 < be && lattice[i + 1][0] <= lattice[k + 1][0]);
+                if bottom {
+                    self.tris.push([id(i), id(i + 1), id(k)]);
+                    i += 1;
+                } else {
+                    self.tris.push([id(i), id(k + 1), id(k)]);
+                    k += 1;
+                }
+            }
+        }
+        let band = self.tris.len();
+        // The rows' outline, counter-clockwise: the first row, the rows' right ends, the last
+        // row back, the rows' left ends.
+        let (first, top) = (rows[0], rows[rows.len() - 1]);
+        let mut q: Vec<u32> = (first.0..first.1).map(id).collect();
+        q.extend(rows[1..].iter().map(|r| id(r.1 - 1)));
+        q.extend((top.0..top.1 - 1).rev().map(id));
+        q.extend(rows[1..rows.len() - 1].iter().rev().map(|r| id(r.0)));
+        // The band: the polygon and the outline zipped from the first corner and the first
+        // row's first point, each step along the one whose new diagonal is shorter, of the
+        // steps that make a counter-clockwise triangle. Every triangle counter-clockwise and
+        // each chain gone round once, the triangles cover the band once.
+        let nq = q.len();
+        let pt = |i: u32| coord(self.pts[i as usize]);
+        let d2 = |a: u32, b: u32| {
+            let (p, r) = (self.pts[a as usize], self.pts[b as usize]);
+            (p[0] - r[0]).powi(2) + (p[1] - r[1]).powi(2)
+        };
+        let pp = |i: usize| (i % nb) as u32;
+        let qq = |k: usize| q[k % nq];
+        let (mut i, mut k) = (0, 0);
+        let mut zipped = Vec::with_capacity(nb + nq);
+        while i < nb || k < nq {
+            let along_p = i < nb && orient2d(pt(pp(i)), pt(pp(i + 1)), pt(qq(k))) > 0.0;
+            let along_q = k < nq && orient2d(pt(pp(i)), pt(qq(k + 1)), pt(qq(k))) > 0.0;
+            let step_p = match (along_p, along_q) {
+                (true, true) => d2(pp(i + 1), qq(k)) <= d2(pp(i), qq(k + 1)),
+                (true, false) => true,
+                (false, true) => false,
+                (false, false) => return None,
+            };
+            if step_p {
+                zipped.push([pp(i), pp(i + 1), qq(k)]);
+                i += 1;
+            } else {
+                zipped.push([pp(i), qq(k + 1), qq(k)]);
+                k += 1;
+            }
+        }
+        self.tris.extend(zipped);
+        // Neighbours: each directed edge meets its reverse once; what is left unmatched is
+        // exactly the polygon's sides.
+        self.adj.resize(self.tris.len(), [NONE; 3]);
+        self.open.clear();
+        let key = |a: u32, b: u32| (u64::from(a) << 32) | u64::from(b);
+        for t in 0..self.tris.len() {
+            let v = self.tris[t];
+            for e in 0..3 {
+                let (a, b) = (v[e], v[(e + 1) % 3]);
+                if let Some((u, f)) = self.open.remove(&key(b, a)) {
+                    self.adj[t][e] = u;
+                    self.adj[u as usize][f] = t as u32;
+                } else if self.open.insert(key(a, b), (t as u32, e)).is_some() {
+                    return None;
+                }
+            }
+        }
+        if self.open.len() != nb || (0..nb).any(|i| !self.open.contains_key(&key(pp(i), pp(i + 1))))
+        {
+            return None;
+        }
+        // Lawson's flips from the band's edges (the strips' inner edges are Delaunay among
+        // themselves: two equilateral triangles, or near it, across each).
+        self.stack
+            .extend((band..self.tris.len()).flat_map(|t| (0..3).map(move |e| (t as u32, e))));
+        self.flip_all();
+        Some(())
+    }
+
+    /// Flips every edge on the stack that is not locally Delaunay, and after each flip the
+    /// four edges around it, until none is left: Lawson's algorithm, which ends with every
+    /// edge locally Delaunay (the polygon's sides excepted, never flipped).
+    fn flip_all(&mut self) {
+        while let Some((t, k)) = self.stack.pop() {
+            if let Some((t, u)) = self.flip(t, k) {
+                self.stack.extend([(t, 0), (t, 2), (u, 0), (u, 1)]);
+            }
+        }
     }
 
     /// Splits the directed hull edge `a → b` at the point `i` on it and flips what is not
@@ -327,6 +499,22 @@ impl PolyCdt {
         Some(())
     }
 
+    /// Whether the first of the four points in the order of their coordinates (`x`, then
+    /// `y`) is one of `ours` rather than one of `theirs`. Four points on one circle have two
+    /// Delaunay diagonals; the one at that point is kept, as if it lay a hair inside the
+    /// circle (and the second a smaller hair, and so on): a consistent perturbation, so
+    /// the triangulation is the same whatever the order its points came in, and however
+    /// many other points far from them there are.
+    fn first_of(&self, ours: [u32; 2], theirs: [u32; 2]) -> bool {
+        let key = |i: u32| self.pts[i as usize];
+        let before =
+            |u: [f64; 2], v: [f64; 2]| u[0].total_cmp(&v[0]).then(u[1].total_cmp(&v[1])).is_lt();
+        let (o, t) = (ours.map(key), theirs.map(key));
+        let o = if before(o[1], o[0]) { o[1] } else { o[0] };
+        let t = if before(t[1], t[0]) { t[1] } else { t[0] };
+        before(o, t)
+    }
+
     /// In triangle `n` (if any), the neighbour `old` becomes `new`.
     fn repoint(&mut self, n: u32, old: u32, new: u32) {
         if n == NONE {
@@ -345,35 +533,54 @@ impl PolyCdt {
     /// face the new point.
     fn legalize(&mut self) {
         while let Some((t, k)) = self.stack.pop() {
-            let u = self.adj[t as usize][k];
-            if u == NONE {
-                continue;
+            if let Some((t, u)) = self.flip(t, k) {
+                // The edges now facing p: a–q in t, q–b in u.
+                self.stack.extend([(t, 0), (u, 0)]);
             }
-            let v = self.tris[t as usize];
-            let (a, b, p) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
-            let w = self.tris[u as usize];
-            let Some(j) = (0..3).find(|&j| w[j] == b && w[(j + 1) % 3] == a) else {
-                continue;
-            };
-            let q = w[(j + 2) % 3];
-            let pt = |i: u32| coord(self.pts[i as usize]);
-            if incircle(pt(a), pt(b), pt(p), pt(q)) <= 0.0 {
-                continue;
-            }
-            // Quad a, q, b, p (counter-clockwise): the diagonal a–b becomes p–q.
-            let tn = self.adj[t as usize];
-            let un = self.adj[u as usize];
-            let (nbp, npa) = (tn[(k + 1) % 3], tn[(k + 2) % 3]);
-            let (naq, nqb) = (un[(j + 1) % 3], un[(j + 2) % 3]);
-            self.tris[t as usize] = [a, q, p];
-            self.adj[t as usize] = [naq, u, npa];
-            self.tris[u as usize] = [q, b, p];
-            self.adj[u as usize] = [nqb, nbp, t];
-            self.repoint(naq, u, t);
-            self.repoint(nbp, t, u);
-            // The edges now facing p: a–q in t, q–b in u.
-            self.stack.extend([(t, 0), (u, 0)]);
         }
+    }
+
+    /// Flips edge `k` of triangle `t` (from `a` to `b`, `p` opposite) if it is an inner edge
+    /// that is not locally Delaunay: the point `q` across it lies strictly inside the
+    /// circle of `a, b, p`. Then `t` is `[a, q, p]` and `u`, the triangle that was across,
+    /// `[q, b, p]`: returns them.
+    #[inline(always)]
+    fn flip(&mut self, t: u32, k: usize) -> Option<(u32, u32)> {
+        let u = self.adj[t as usize][k];
+        if u == NONE {
+            return None;
+        }
+        let v = self.tris[t as usize];
+        let (a, b, p) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+        let w = self.tris[u as usize];
+        // The edge's place in `u` (written out: a search closure was not inlined here).
+        let j = if w[0] == b && w[1] == a {
+            0
+        } else if w[1] == b && w[2] == a {
+            1
+        } else if w[2] == b && w[0] == a {
+            2
+        } else {
+            return None;
+        };
+        let q = w[(j + 2) % 3];
+        let pt = |i: u32| coord(self.pts[i as usize]);
+        let o = incircle(pt(a), pt(b), pt(p), pt(q));
+        if o < 0.0 || (o == 0.0 && !self.first_of([p, q], [a, b])) {
+            return None;
+        }
+        // Quad a, q, b, p (counter-clockwise): the diagonal a–b becomes p–q.
+        let tn = self.adj[t as usize];
+        let un = self.adj[u as usize];
+        let (nbp, npa) = (tn[(k + 1) % 3], tn[(k + 2) % 3]);
+        let (naq, nqb) = (un[(j + 1) % 3], un[(j + 2) % 3]);
+        self.tris[t as usize] = [a, q, p];
+        self.adj[t as usize] = [naq, u, npa];
+        self.tris[u as usize] = [q, b, p];
+        self.adj[u as usize] = [nqb, nbp, t];
+        self.repoint(naq, u, t);
+        self.repoint(nbp, t, u);
+        Some((t, u))
     }
 }
 
@@ -475,6 +682,116 @@ mod tests {
                 .collect();
             assert_eq!(sorted(ours.triangles().to_vec()), sorted(theirs));
         }
+    }
+
+    /// A polygon, its corners and lattice points by row.
+    type LatticeCase = (Vec<[f64; 2]>, [usize; 3], Vec<(u32, [f64; 2])>);
+
+    /// A random triangle's polygon (first side along x, sides divided into parts of about
+    /// `h`), and the lattice of spacing `h` the remesh lays inside it (rows along the first
+    /// side, √3/2·h apart, odd rows shifted by h/2, kept h/2 from the sides): its points by
+    /// row (row number, point).
+    fn lattice_case(rng: &mut Lcg) -> LatticeCase {
+        let c = [
+            [0.0, 0.0],
+            [1.0 + 2.0 * rng.next(), 0.0],
+            [rng.next() * 3.0 - 1.0, 0.2 + 1.5 * rng.next()],
+        ];
+        let h = 0.05 + 0.2 * rng.next();
+        let mut boundary = Vec::new();
+        let mut corners = [0; 3];
+        for k in 0..3 {
+            corners[k] = boundary.len();
+            let (p, q) = (c[k], c[(k + 1) % 3]);
+            let l = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+            let m = (l / h).ceil().max(1.0) as usize;
+            for i in 0..m {
+                let f = i as f64 / m as f64;
+                boundary.push([p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])]);
+            }
+        }
+        // Signed distance to side k (positive inside).
+        let dist = |k: usize, x: f64, y: f64| {
+            let (p, q) = (c[k], c[(k + 1) % 3]);
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            (dx * (y - p[1]) - dy * (x - p[0])) / (dx * dx + dy * dy).sqrt()
+        };
+        let dy = 0.5 * 3f64.sqrt() * h;
+        let mut lattice = Vec::new();
+        for j in 1..200u32 {
+            let y = f64::from(j) * dy;
+            let shift = if j % 2 == 1 { 0.5 * h } else { 0.0 };
+            for i in -200..200 {
+                let x = shift + f64::from(i) * h;
+                if (0..3).all(|k| dist(k, x, y) >= 0.5 * h) {
+                    lattice.push((j, [x, y]));
+                }
+            }
+        }
+        (boundary, corners, lattice)
+    }
+
+    /// Random faces with the remesh's lattice: the leading rows laid out by
+    /// `reset_lattice` and the rest inserted give the triangles of inserting every point
+    /// one by one (unique here: no four points on an empty circle), each counter-clockwise.
+    #[test]
+    fn lattice_layout_matches_insertion_point_by_point() {
+        let mut rng = Lcg(11);
+        let mut laid_out = 0;
+        for _ in 0..300 {
+            let (boundary, corners, lattice) = lattice_case(&mut rng);
+            let flat: Vec<[f64; 2]> = lattice.iter().map(|l| l.1).collect();
+            let mut ours = PolyCdt::default();
+            let mut rows: Vec<(usize, usize)> = Vec::new();
+            for (i, &(j, _)) in lattice.iter().enumerate() {
+                match rows.last_mut() {
+                    Some(r) if lattice[r.0].0 == j => r.1 = i + 1,
+                    _ => rows.push((i, i + 1)),
+                }
+            }
+            let laid = rows
+                .iter()
+                .enumerate()
+                .position(|(k, r)| {
+                    r.1 < r.0 + 2 || (k > 0 && lattice[r.0].0 != lattice[rows[k - 1].0].0 + 1)
+                })
+                .unwrap_or(rows.len());
+            let upto = rows[..laid].last().map_or(0, |r| r.1);
+            let rest = if ours
+                .reset_lattice(
+                    &boundary,
+                    corners,
+                    &flat[..upto],
+                    &rows[..laid],
+                    flat.len() - upto,
+                )
+                .is_some()
+            {
+                laid_out += 1;
+                upto
+            } else {
+                assert!(laid < 2, "a lattice of {laid} rows not laid out");
+                ours.reset(&boundary, corners, flat.len()).expect("polygon");
+                0
+            };
+            for &p in &flat[rest..] {
+                ours.insert(p).expect("lattice point");
+            }
+            let mut theirs = PolyCdt::new(&boundary, corners, flat.len()).expect("polygon");
+            for &p in &flat {
+                theirs.insert(p).expect("lattice point");
+            }
+            assert_eq!(ours.triangles().len(), boundary.len() + 2 * flat.len() - 2);
+            for t in ours.triangles() {
+                let [a, b, c] = t.map(|i| coord(ours.pts[i as usize]));
+                assert!(orient2d(a, b, c) > 0.0);
+            }
+            assert_eq!(
+                sorted(ours.triangles().to_vec()),
+                sorted(theirs.triangles().to_vec())
+            );
+        }
+        assert!(laid_out > 200, "only {laid_out} of 300 faces laid out");
     }
 
     /// A point on a vertex or outside the polygon is refused, not placed.

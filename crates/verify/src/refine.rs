@@ -688,6 +688,7 @@ fn vertex_normals(
             let (mut normals, mut count) = (Vec::new(), Vec::with_capacity(e - b));
             // Each corner's angle, computed once per vertex (not once per pair of corners).
             let mut angles: Vec<f64> = Vec::new();
+            let mut order: Vec<usize> = Vec::new();
             let base = start[b] as usize;
             for v in b..e {
                 let (c0, c1) = (start[v] as usize, start[v + 1] as usize);
@@ -707,6 +708,13 @@ fn vertex_normals(
                 }
                 angles.clear();
                 angles.extend(cs.iter().map(|&(g, j)| angle(g, j)));
+                // Summed in an order of their own (by design face, then angle), not the
+                // faces' order, so that the same faces around the vertex, listed in
+                // another order (a region leaving out points far from it), give the same
+                // bits.
+                order.clear();
+                order.extend(0..cs.len());
+                order.sort_unstable_by_key(|&i| (src[cs[i].0 as usize], angles[i].to_bits()));
                 // Averaging across every crease (180°, as the verifier does) and every face
                 // within 89° of the first, so any two within 178°: every corner's sum takes
                 // every face, in the same order, and is the same. Summed once.
@@ -716,8 +724,8 @@ fn vertex_normals(
                         .all(|&(g, _)| face_n[g as usize].dot(n0) >= HEMISPHERE_COS)
                 {
                     let mut sum = DVec3::ZERO;
-                    for (&(g, _), &w) in cs.iter().zip(&angles) {
-                        sum += w * face_n[g as usize];
+                    for &i in &order {
+                        sum += angles[i] * face_n[cs[i].0 as usize];
                     }
                     normals.push(sum.try_normalize().unwrap_or(n0));
                     count.push(1);
@@ -727,10 +735,10 @@ fn vertex_normals(
                 for (i, &(f, _)) in cs.iter().enumerate() {
                     let nf = face_n[f as usize];
                     let mut sum = DVec3::ZERO;
-                    for (&(g, _), &w) in cs.iter().zip(&angles) {
-                        let ng = face_n[g as usize];
+                    for &i in &order {
+                        let ng = face_n[cs[i].0 as usize];
                         if ng.dot(nf) >= cos_crease {
-                            sum += w * ng;
+                            sum += angles[i] * ng;
                         }
                     }
                     let n = sum.try_normalize().unwrap_or(nf);

@@ -14,9 +14,10 @@
 //!   with the longest edge's points (a lattice of its own spacing drifted against them and
 //!   needed a midpoint in every other gap: 12 % more vertices on the dome);
 //! * boundary and lattice points are joined by a constrained Delaunay triangulation of the
-//!   face's plane (the crate's own small one, Lawson flips on exact predicates; spade
-//!   where that cannot place a point, with the same result wherever the triangulation is
-//!   unique).
+//!   face's plane (the crate's own small one, Lawson flips on exact predicates: the
+//!   lattice's rows laid out directly and the band between them and the sides zipped and
+//!   flipped, see `PolyCdt::reset_lattice`; spade where that cannot place a point, with
+//!   the same result wherever the triangulation is unique).
 //!
 //! Inner edges still longer than `s` (where the lattice meets the other sides) get their
 //! midpoints in two rounds, only the longest such edge of a triangle in each
@@ -139,7 +140,7 @@ pub(crate) fn remesh(
             .map(|(f, (t, _))| {
                 let (t, h) = lattice_plan(pos0, t, s);
                 Frame::new(pos0, &t).map_or(0, |fr| {
-                    lattice_points(&fr, h, &near_of(Some(f)), room + 1, |_, _, _| {})
+                    lattice_points(&fr, h, &near_of(Some(f)), room + 1, |_, _, _, _| {})
                 })
             })
             .sum();
@@ -376,15 +377,16 @@ fn local(ids: &[u32], i: usize) -> Local {
     }
 }
 
-/// Calls `f(px, py, p)` for each point of the face's lattice of spacing `h` (rows parallel
-/// to its first edge from its first corner, √3/2·h apart, odd rows shifted by h/2, kept h/2
-/// from the sides) for which `near(p)` holds, at most `limit` of them; returns how many.
+/// Calls `f(j, px, py, p)` for each point of the face's lattice of spacing `h` (rows `j =
+/// 1, 2, …` parallel to its first edge from its first corner, √3/2·h apart, odd rows
+/// shifted by h/2, kept h/2 from the sides; each row left to right) for which `near(p)`
+/// holds, at most `limit` of them; returns how many.
 fn lattice_points(
     frame: &Frame,
     h: f64,
     near: &dyn Fn(DVec3) -> bool,
     limit: usize,
-    mut f: impl FnMut(f64, f64, DVec3),
+    mut f: impl FnMut(u32, f64, f64, DVec3),
 ) -> usize {
     let (c2, b2) = (frame.to2(frame.c), frame.to2(frame.b));
     let margin = 0.5 * h;
@@ -429,7 +431,7 @@ fn lattice_points(
                 if count == limit {
                     return count;
                 }
-                f(px, py, p);
+                f(j, px, py, p);
                 count += 1;
             }
             px += h;
@@ -469,6 +471,10 @@ struct Scratch {
     cands: Vec<Candidate>,
     /// Per triangle, the squared length of its longest candidate edge.
     longest: Vec<f64>,
+    /// The lattice's rows: row number, first and end index into `flat`.
+    rows: Vec<(u32, usize, usize)>,
+    /// The leading rows handed to `PolyCdt::reset_lattice`.
+    ranges: Vec<(usize, usize)>,
 }
 
 /// [`face_mesh`] by [`PolyCdt`]; `None` where it cannot place a point or the result is not
@@ -496,6 +502,8 @@ fn face_mesh_own(
         mids,
         cands,
         longest,
+        rows,
+        ranges,
     } = scratch;
     pts.clear();
     pts.extend(ids.iter().map(|&i| {
@@ -504,15 +512,43 @@ fn face_mesh_own(
     }));
     let mut lattice = Vec::new();
     flat.clear();
+    rows.clear();
     if h > 0.0 {
-        lattice_points(&frame, h, near, usize::MAX, |px, py, p| {
+        lattice_points(&frame, h, near, usize::MAX, |j, px, py, p| {
+            // Rows one after another (`j` each one more), as `PolyCdt::reset_lattice` takes
+            // them; a row that does not follow on (a gap the region left) ends them.
+            match rows.last_mut() {
+                Some((rj, _, e)) if *rj == j => *e += 1,
+                _ => rows.push((j, flat.len(), flat.len() + 1)),
+            }
             flat.push([px, py]);
             lattice.push(p);
         });
     }
+    // The leading rows of two or more points, each the row after the one before, are
+    // triangulated as a lattice; any points after them are inserted one by one.
+    let mut laid = rows.len();
+    for (k, w) in rows.iter().enumerate() {
+        if w.2 < w.1 + 2 || (k > 0 && w.0 != rows[k - 1].0 + 1) {
+            laid = k;
+            break;
+        }
+    }
+    ranges.clear();
+    ranges.extend(rows[..laid].iter().map(|&(_, s, e)| (s, e)));
+    let upto = ranges.last().map_or(0, |r| r.1);
     // Room for the midpoints too (about half as many again).
-    cdt.reset(pts, corners, flat.len() + flat.len() / 2 + nb)?;
-    for &p in flat.iter() {
+    let room = flat.len() + flat.len() / 2 + nb;
+    let rest = if cdt
+        .reset_lattice(pts, corners, &flat[..upto], ranges, room - upto)
+        .is_some()
+    {
+        upto
+    } else {
+        cdt.reset(pts, corners, room)?;
+        0
+    };
+    for &p in &flat[rest..] {
         cdt.insert(p)?;
     }
     // Inner edges still longer than `s` get their midpoints (see `face_mesh_spade`).
@@ -564,7 +600,7 @@ fn face_mesh_spade(
     // The lattice (see `lattice_points`), then any midpoints added below.
     let mut lattice = Vec::new();
     if h > 0.0 {
-        lattice_points(&frame, h, near, usize::MAX, |px, py, p| {
+        lattice_points(&frame, h, near, usize::MAX, |_, px, py, p| {
             pts.push(Point2::new(px, py));
             lattice.push(p);
         });
