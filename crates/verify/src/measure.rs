@@ -948,7 +948,7 @@ impl Extras {
         let codes = crate::locate::morton_codes(&mids);
         let mut order: Vec<(u64, usize)> =
             codes.into_iter().enumerate().map(|(i, c)| (c, i)).collect();
-        order.sort_unstable();
+        order.par_sort_unstable();
         let bounds: Vec<_> = order.iter().map(|&(_, i)| bounds[i]).collect();
         let items: Vec<_> = order.iter().map(|&(_, i)| items[i]).collect();
         let mids = items
@@ -2098,7 +2098,7 @@ fn measure_vectors(
             // depend on them, but for the last bits of a bull's Newton solve).
             let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
             let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
-            order.sort_unstable();
+            order.par_sort_unstable();
             let done: Vec<TileReadings> = order
                 .par_chunks(DIRECT_TILE)
                 // One tile per piece: tiles differ in cost with the part's shape (a flat

@@ -212,3 +212,28 @@ fn absurd_arcs_are_errors_not_allocations() {
     assert_eq!(tp.moves.len() - 1, n);
     assert!(n > 70_000, "{n}");
 }
+
+/// Of two errors, the earlier line's is reported, whichever kind each is and however far
+/// apart they are (the lines' words are read in parallel, in chunks of thousands of lines,
+/// before their blocks are executed in order): an execution error (an incremental move
+/// from an unknown position) before a malformed word, and a malformed word before an
+/// execution error, in one chunk and across chunks.
+#[test]
+fn the_first_of_two_errors_in_line_order_is_reported() {
+    let cfg = ReadConfig::default();
+    let filler = |n: usize| "G1 X1 Y1 Z1 F100\n".repeat(n);
+    for gap in [1, 5000, 20_000] {
+        // Line 2: G91 then a move from an unknown position is an execution error.
+        let exec_first = format!("G91\nG1 X1\n{}G1 X#\n", filler(gap));
+        let e = parse_gcode(&exec_first, &cfg).unwrap_err();
+        assert_eq!(e.line, 2, "{e}");
+        // Line 2 malformed, then an execution error later.
+        let word_first = format!("G21\nG1 X#\n{}G91\nG1 X1\n", filler(gap));
+        let e = parse_gcode(&word_first, &cfg).unwrap_err();
+        assert_eq!(e.line, 2, "{e}");
+        // Only the later error: its own line.
+        let later = format!("G21\n{}G1 Q1\n", filler(gap));
+        let e = parse_gcode(&later, &cfg).unwrap_err();
+        assert_eq!(e.line, gap + 2, "{e}");
+    }
+}
