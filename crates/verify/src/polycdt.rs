@@ -40,6 +40,32 @@ pub(crate) struct PolyCdt {
     /// Scratch for [`PolyCdt::reset_lattice`]: directed edges `a << 32 | b` waiting for
     /// their reverse, with their triangle and edge index.
     open: EdgeMap,
+    /// Scratch for [`PolyCdt::reset_lattice`]: the lattice rows' outline.
+    outline: Vec<u32>,
+}
+
+/// Whether `corners` index the polygon `boundary` as [`PolyCdt::reset`] takes them (the
+/// first 0, increasing) and turn counter-clockwise (exact predicate).
+fn corners_turn_left(boundary: &[[f64; 2]], [c0, c1, c2]: [usize; 3]) -> bool {
+    c0 == 0
+        && c0 < c1
+        && c1 < c2
+        && c2 < boundary.len()
+        && orient2d(
+            coord(boundary[c0]),
+            coord(boundary[c1]),
+            coord(boundary[c2]),
+        ) > 0.0
+}
+
+/// How many of the lattice's leading `rows` (row number, first and end point index, in
+/// order) [`PolyCdt::reset_lattice`] can lay out: rows of two or more points, each the row
+/// after the one before. A row that does not follow on (a gap a region left) ends them.
+pub(crate) fn leading_rows(rows: &[(u32, usize, usize)]) -> usize {
+    rows.iter()
+        .enumerate()
+        .position(|(k, r)| r.2 < r.1 + 2 || (k > 0 && r.0 != rows[k - 1].0 + 1))
+        .unwrap_or(rows.len())
 }
 
 fn coord(p: [f64; 2]) -> Coord<f64> {
@@ -66,10 +92,10 @@ impl PolyCdt {
         corners: [usize; 3],
         inner: usize,
     ) -> Option<()> {
-        let [c0, c1, c2] = corners;
-        if c0 != 0 || !(c0 < c1 && c1 < c2 && c2 < boundary.len()) {
+        if !corners_turn_left(boundary, corners) {
             return None;
         }
+        let [c0, c1, c2] = corners;
         let n = boundary.len() + inner;
         self.pts.clear();
         self.pts.reserve(n);
@@ -83,14 +109,6 @@ impl PolyCdt {
         self.last = 0;
         self.stack.clear();
         let cdt = self;
-        if orient2d(
-            coord(boundary[c0]),
-            coord(boundary[c1]),
-            coord(boundary[c2]),
-        ) <= 0.0
-        {
-            return None;
-        }
         // The first side's points in order from `c0`, each splitting the hull edge from the
         // previous one to `c1`. Then the other two sides' points climb towards `c2`
         // together, the second's from `c1`, the third's from `c0` (against the polygon's
@@ -148,16 +166,7 @@ impl PolyCdt {
         room: usize,
     ) -> Option<()> {
         let nb = boundary.len();
-        let [c0, c1, c2] = corners;
-        if c0 != 0 || !(c0 < c1 && c1 < c2 && c2 < nb) || rows.len() < 2 {
-            return None;
-        }
-        if orient2d(
-            coord(boundary[c0]),
-            coord(boundary[c1]),
-            coord(boundary[c2]),
-        ) <= 0.0
-        {
+        if rows.len() < 2 || !corners_turn_left(boundary, corners) {
             return None;
         }
         let mut next = 0;
@@ -206,11 +215,12 @@ impl PolyCdt {
                 }
             }
         }
-        let band = self.tris.len();
         // The rows' outline, counter-clockwise: the first row, the rows' right ends, the last
         // row back, the rows' left ends.
         let (first, top) = (rows[0], rows[rows.len() - 1]);
-        let mut q: Vec<u32> = (first.0..first.1).map(id).collect();
+        let mut q = std::mem::take(&mut self.outline);
+        q.clear();
+        q.extend((first.0..first.1).map(id));
         q.extend(rows[1..].iter().map(|r| id(r.1 - 1)));
         q.extend((top.0..top.1 - 1).rev().map(id));
         q.extend(rows[1..rows.len() - 1].iter().rev().map(|r| id(r.0)));
@@ -227,7 +237,6 @@ impl PolyCdt {
         let pp = |i: usize| (i % nb) as u32;
         let qq = |k: usize| q[k % nq];
         let (mut i, mut k) = (0, 0);
-        let mut zipped = Vec::with_capacity(nb + nq);
         while i < nb || k < nq {
             let along_p = i < nb && orient2d(pt(pp(i)), pt(pp(i + 1)), pt(qq(k))) > 0.0;
             let along_q = k < nq && orient2d(pt(pp(i)), pt(qq(k + 1)), pt(qq(k))) > 0.0;
@@ -235,17 +244,20 @@ impl PolyCdt {
                 (true, true) => d2(pp(i + 1), qq(k)) <= d2(pp(i), qq(k + 1)),
                 (true, false) => true,
                 (false, true) => false,
-                (false, false) => return None,
+                (false, false) => break,
             };
             if step_p {
-                zipped.push([pp(i), pp(i + 1), qq(k)]);
+                self.tris.push([pp(i), pp(i + 1), qq(k)]);
                 i += 1;
             } else {
-                zipped.push([pp(i), qq(k + 1), qq(k)]);
+                self.tris.push([pp(i), qq(k + 1), qq(k)]);
                 k += 1;
             }
         }
-        self.tris.extend(zipped);
+        self.outline = q;
+        if i < nb || k < nq {
+            return None;
+        }
         // Neighbours: each directed edge meets its reverse once; what is left unmatched is
         // exactly the polygon's sides.
         self.adj.resize(self.tris.len(), [NONE; 3]);
@@ -267,10 +279,18 @@ impl PolyCdt {
         {
             return None;
         }
-        // Lawson's flips from the band's edges (the strips' inner edges are Delaunay among
-        // themselves: two equilateral triangles, or near it, across each).
-        self.stack
-            .extend((band..self.tris.len()).flat_map(|t| (0..3).map(move |e| (t as u32, e))));
+        // Lawson's flips from every inner edge, once each: the strips' edges are Delaunay
+        // among themselves where the rows are the remesh's, evenly spaced and offset by half
+        // a spacing (two equilateral triangles across each), but not across a gap a region
+        // left in a row, nor where four of their points lie on one circle (rows of a square
+        // grid) and the tie goes the other way.
+        let adj = &self.adj;
+        self.stack.extend(
+            (0..adj.len())
+                .flat_map(|t| (0..3).map(move |e| (t, e)))
+                .filter(|&(t, e)| adj[t][e] != NONE && (t as u32) < adj[t][e])
+                .map(|(t, e)| (t as u32, e)),
+        );
         self.flip_all();
         Some(())
     }
@@ -742,20 +762,15 @@ mod tests {
             let (boundary, corners, lattice) = lattice_case(&mut rng);
             let flat: Vec<[f64; 2]> = lattice.iter().map(|l| l.1).collect();
             let mut ours = PolyCdt::default();
-            let mut rows: Vec<(usize, usize)> = Vec::new();
+            let mut labelled: Vec<(u32, usize, usize)> = Vec::new();
             for (i, &(j, _)) in lattice.iter().enumerate() {
-                match rows.last_mut() {
-                    Some(r) if lattice[r.0].0 == j => r.1 = i + 1,
-                    _ => rows.push((i, i + 1)),
+                match labelled.last_mut() {
+                    Some(r) if r.0 == j => r.2 = i + 1,
+                    _ => labelled.push((j, i, i + 1)),
                 }
             }
-            let laid = rows
-                .iter()
-                .enumerate()
-                .position(|(k, r)| {
-                    r.1 < r.0 + 2 || (k > 0 && lattice[r.0].0 != lattice[rows[k - 1].0].0 + 1)
-                })
-                .unwrap_or(rows.len());
+            let laid = leading_rows(&labelled);
+            let rows: Vec<(usize, usize)> = labelled.iter().map(|r| (r.1, r.2)).collect();
             let upto = rows[..laid].last().map_or(0, |r| r.1);
             let rest = if ours
                 .reset_lattice(
@@ -792,6 +807,84 @@ mod tests {
             );
         }
         assert!(laid_out > 200, "only {laid_out} of 300 faces laid out");
+    }
+
+    /// Where four points lie on one empty circle (the unit squares of a grid of integer
+    /// points in a right triangle) the triangulation is the same whatever order the inner
+    /// points come in, and laid out as a lattice it is the same again: ties keep the
+    /// diagonal at the first point by coordinates. Keeping the diagonal found first fails
+    /// here (checked).
+    #[test]
+    fn ties_are_broken_the_same_whatever_the_order() {
+        let n = 8;
+        let mut boundary = Vec::new();
+        for i in 0..n {
+            boundary.push([f64::from(i), 0.0]);
+        }
+        for i in 0..n {
+            boundary.push([f64::from(n - i), f64::from(i)]);
+        }
+        for i in 0..n {
+            boundary.push([0.0, f64::from(n - i)]);
+        }
+        let corners = [0, n as usize, 2 * n as usize];
+        let inner: Vec<[f64; 2]> = (1..n)
+            .flat_map(|y| (1..n - y).map(move |x| [f64::from(x), f64::from(y)]))
+            .collect();
+        let build = |order: &[[f64; 2]]| {
+            let mut cdt = PolyCdt::new(&boundary, corners, order.len()).expect("polygon");
+            for &p in order {
+                cdt.insert(p).expect("inner point");
+            }
+            sorted(cdt.triangles().to_vec())
+        };
+        // Triangles as point coordinates: the orders number the inner points differently.
+        let pts = |order: &[[f64; 2]], t: Vec<[u32; 3]>| {
+            let at = |i: u32| {
+                let i = i as usize;
+                let p = if i < boundary.len() {
+                    boundary[i]
+                } else {
+                    order[i - boundary.len()]
+                };
+                (p[0] as i64, p[1] as i64)
+            };
+            let mut t: Vec<[(i64, i64); 3]> = t
+                .into_iter()
+                .map(|t| {
+                    let mut c = t.map(at);
+                    let r = (0..3).min_by_key(|&k| c[k]).unwrap();
+                    c.rotate_left(r);
+                    c
+                })
+                .collect();
+            t.sort_unstable();
+            t
+        };
+        let forward = pts(&inner, build(&inner));
+        let backward: Vec<[f64; 2]> = inner.iter().rev().copied().collect();
+        assert_eq!(pts(&backward, build(&backward)), forward);
+        let mut shuffled = inner.clone();
+        let mut rng = Lcg(5);
+        for i in (1..shuffled.len()).rev() {
+            shuffled.swap(i, (rng.next() * (i + 1) as f64) as usize % (i + 1));
+        }
+        assert_eq!(pts(&shuffled, build(&shuffled)), forward);
+        // Rows of the grid laid out as a lattice (every row but the last two points or more).
+        let mut laid = PolyCdt::default();
+        let mut rows = Vec::new();
+        let mut at = 0;
+        for y in 1..n - 2 {
+            let len = (n - 1 - y) as usize;
+            rows.push((at, at + len));
+            at += len;
+        }
+        laid.reset_lattice(&boundary, corners, &inner[..at], &rows, inner.len() - at)
+            .expect("laid out");
+        for &p in &inner[at..] {
+            laid.insert(p).expect("inner point");
+        }
+        assert_eq!(pts(&inner, sorted(laid.triangles().to_vec())), forward);
     }
 
     /// A point on a vertex or outside the polygon is refused, not placed.

@@ -515,8 +515,7 @@ fn face_mesh_own(
     rows.clear();
     if h > 0.0 {
         lattice_points(&frame, h, near, usize::MAX, |j, px, py, p| {
-            // Rows one after another (`j` each one more), as `PolyCdt::reset_lattice` takes
-            // them; a row that does not follow on (a gap the region left) ends them.
+            // Rows as `polycdt::leading_rows` takes them.
             match rows.last_mut() {
                 Some((rj, _, e)) if *rj == j => *e += 1,
                 _ => rows.push((j, flat.len(), flat.len() + 1)),
@@ -525,15 +524,9 @@ fn face_mesh_own(
             lattice.push(p);
         });
     }
-    // The leading rows of two or more points, each the row after the one before, are
-    // triangulated as a lattice; any points after them are inserted one by one.
-    let mut laid = rows.len();
-    for (k, w) in rows.iter().enumerate() {
-        if w.2 < w.1 + 2 || (k > 0 && w.0 != rows[k - 1].0 + 1) {
-            laid = k;
-            break;
-        }
-    }
+    // The leading rows are triangulated as a lattice; any points after them are inserted
+    // one by one.
+    let laid = crate::polycdt::leading_rows(rows);
     ranges.clear();
     ranges.extend(rows[..laid].iter().map(|&(_, s, e)| (s, e)));
     let upto = ranges.last().map_or(0, |r| r.1);
