@@ -299,21 +299,53 @@ pub fn capsule_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry>
 }
 
 /// [`capsule_entry`], with (`quick`) or without the hull rejection first.
+///
+/// The capsule lies in its infinite cylinder: where the line enters the cylinder at or
+/// after the segment's start at a point between the centres' planes, that point is the
+/// entry, and the two spheres' intervals are not computed (most of a ball's entries);
+/// otherwise the least entry of the three parts ([`capsule_parts_entry`]).
 fn capsule_entry_with(line: &Line, c0: DVec3, c1: DVec3, r: f64, quick: bool) -> Option<Entry> {
     if quick && misses_capsule_hull(line, c0, c1, r) {
         return None;
     }
-    capsule_side_entry(line, c0, c1, r).unwrap_or_else(|| capsule_entry_full(line, c0, c1, r))
+    let side = cylinder_side(line, c0, c1, r);
+    if let Some(c) = &side
+        && c.across
+    {
+        let Some((s, _)) = c.inside else {
+            // The line misses the cylinder, and so the capsule.
+            return None;
+        };
+        // Where along the centres' run the line enters (times |d|²).
+        let (d, n) = (c1 - c0, line.n);
+        let t = c.m.dot(d) + s * n.dot(d);
+        if s >= line.lo && (0.0..=c.dd).contains(&t) {
+            return (s <= line.hi).then(|| {
+                let x = line.o + s * n - c0;
+                let normal = (x - x.dot(c.dh) * c.dh).normalize_or(-n);
+                Entry { s, normal }
+            });
+        }
+    }
+    capsule_parts_entry(line, c0, c1, r, side.as_ref())
 }
 
-/// The capsule's entry decided by its infinite cylinder alone, where that decides it:
-/// `Some(None)` when the line misses the cylinder (and so the capsule), `Some(entry)` when
-/// it enters the cylinder at or after the segment's start at a point between the centres'
-/// planes (the capsule lies in the cylinder, and that point on it), `None` otherwise (an
-/// entry through an end's sphere, a segment starting inside, a line along the axis or a
-/// point-like capsule: [`capsule_entry_full`]). Most of a ball's entries are of the second
-/// kind, and its two spheres' intervals are then not computed.
-fn capsule_side_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Option<Entry>> {
+/// The infinite cylinder of radius `r` about the centres' line `c0`–`c1` (`None` for a
+/// point-like capsule), seen by `line`.
+struct CylinderSide {
+    /// `|c1 − c0|²` and the unit axis.
+    dd: f64,
+    dh: DVec3,
+    /// The line's origin from `c0`.
+    m: DVec3,
+    /// The line runs across the axis (not along it, to 1e-300 in the squared sine).
+    across: bool,
+    /// Where the line is inside the cylinder: `(in, out)` along it (all of it, unbounded,
+    /// for a line along the axis inside).
+    inside: Option<(f64, f64)>,
+}
+
+fn cylinder_side(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<CylinderSide> {
     let (o, n) = (line.o, line.n);
     let d = c1 - c0;
     let dd = d.length_squared();
@@ -321,36 +353,41 @@ fn capsule_side_entry(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Optio
         return None;
     }
     let dh = d / dd.sqrt();
+    // Perpendicular parts.
     let m = o - c0;
     let mp = m - m.dot(dh) * dh;
     let np = n - n.dot(dh) * dh;
     let qa = np.length_squared();
-    if qa <= 1e-300 {
-        return None;
-    }
     let qb = mp.dot(np);
     let qc = mp.length_squared() - r * r;
-    let disc = qb * qb - qa * qc;
-    if disc < 0.0 {
-        return Some(None);
-    }
-    let s = (-qb - disc.sqrt()) / qa;
-    // Where along the centres' run the line enters (times |d|²).
-    let t = m.dot(d) + s * n.dot(d);
-    if s < line.lo || !(0.0..=dd).contains(&t) {
-        return None;
-    }
-    if s > line.hi {
-        return Some(None);
-    }
-    let x = o + s * n - c0;
-    let normal = (x - x.dot(dh) * dh).normalize_or(-n);
-    Some(Some(Entry { s, normal }))
+    let across = qa > 1e-300;
+    let inside = if across {
+        let disc = qb * qb - qa * qc;
+        (disc >= 0.0).then(|| {
+            let sq = disc.sqrt();
+            ((-qb - sq) / qa, (-qb + sq) / qa)
+        })
+    } else {
+        (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY))
+    };
+    Some(CylinderSide {
+        dd,
+        dh,
+        m,
+        across,
+        inside,
+    })
 }
 
 /// [`capsule_entry`] from the capsule's three parts (two spheres and the cylinder between
-/// the centres' planes), the least entry of the three.
-fn capsule_entry_full(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry> {
+/// the centres' planes, `side` as [`cylinder_side`] gives it), the least entry of the three.
+fn capsule_parts_entry(
+    line: &Line,
+    c0: DVec3,
+    c1: DVec3,
+    r: f64,
+    side: Option<&CylinderSide>,
+) -> Option<Entry> {
     let (o, n) = (line.o, line.n);
     let mut best: Option<(f64, DVec3)> = None;
     let mut take = |s_in: f64, s_out: f64, normal_at: &dyn Fn(f64) -> DVec3| {
@@ -368,43 +405,30 @@ fn capsule_entry_full(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<Entry
             take(a, b, &|s| ((o + s * n - c) / r).normalize_or(-n));
         }
     }
-    let d = c1 - c0;
-    let dd = d.length_squared();
-    if dd > 0.0 {
-        let dh = d / dd.sqrt();
-        // Perpendicular parts.
-        let m = o - c0;
-        let mp = m - m.dot(dh) * dh;
-        let np = n - n.dot(dh) * dh;
-        let qa = np.length_squared();
-        let qb = mp.dot(np);
-        let qc = mp.length_squared() - r * r;
-        let cyl = if qa > 1e-300 {
-            let disc = qb * qb - qa * qc;
-            (disc >= 0.0).then(|| {
-                let sq = disc.sqrt();
-                ((-qb - sq) / qa, (-qb + sq) / qa)
-            })
+    if let Some(CylinderSide {
+        dd,
+        dh,
+        m,
+        inside: Some((c_in, c_out)),
+        ..
+    }) = side
+    {
+        // Slab 0 ≤ (x − c0)·d ≤ |d|².
+        let d = c1 - c0;
+        let (p0, pn) = (m.dot(d), n.dot(d));
+        let (t_in, t_out) = if pn.abs() > 1e-300 {
+            let (ta, tb) = (-p0 / pn, (dd - p0) / pn);
+            (ta.min(tb), ta.max(tb))
+        } else if (0.0..=*dd).contains(&p0) {
+            (f64::NEG_INFINITY, f64::INFINITY)
         } else {
-            (qc <= 0.0).then_some((f64::NEG_INFINITY, f64::INFINITY))
+            (1.0, -1.0)
         };
-        if let Some((c_in, c_out)) = cyl {
-            // Slab 0 ≤ (x − c0)·d ≤ |d|².
-            let (p0, pn) = (m.dot(d), n.dot(d));
-            let (t_in, t_out) = if pn.abs() > 1e-300 {
-                let (ta, tb) = (-p0 / pn, (dd - p0) / pn);
-                (ta.min(tb), ta.max(tb))
-            } else if (0.0..=dd).contains(&p0) {
-                (f64::NEG_INFINITY, f64::INFINITY)
-            } else {
-                (1.0, -1.0)
-            };
-            let (s_in, s_out) = (c_in.max(t_in), c_out.min(t_out));
-            take(s_in, s_out, &|s| {
-                let x = o + s * n - c0;
-                (x - x.dot(dh) * dh).normalize_or(-n)
-            });
-        }
+        let (s_in, s_out) = (c_in.max(t_in), c_out.min(t_out));
+        take(s_in, s_out, &|s| {
+            let x = o + s * n - c0;
+            (x - x.dot(*dh) * *dh).normalize_or(-n)
+        });
     }
     best.map(|(s, normal)| Entry { s, normal })
 }
@@ -1603,7 +1627,7 @@ mod tests {
             prop_assume!(n.length() > 1e-3);
             let line = Line { o, n: n.normalize(), lo, hi: lo + len };
             let got = capsule_entry_with(&line, c0, c1, r, false);
-            let want = capsule_entry_full(&line, c0, c1, r);
+            let want = capsule_parts_entry(&line, c0, c1, r, cylinder_side(&line, c0, c1, r).as_ref());
             match (got, want) {
                 (Some(g), Some(w)) => {
                     prop_assert!((g.s - w.s).abs() <= 1e-12 * (1.0 + w.s.abs()), "{} vs {}", g.s, w.s);

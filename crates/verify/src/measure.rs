@@ -1036,44 +1036,38 @@ impl Extras {
     /// [`misses_capsule_at_bottom`] and [`misses_capsule_at_top`] decide one capsule, against
     /// the box that holds the node's centres' segments. `f` is called for the items `visit`
     /// calls it for but those.
-    fn visit_capsules(
-        &self,
-        line: &Line,
-        mut hi: f64,
-        r: f64,
-        mut f: impl FnMut(usize, f64) -> f64,
-    ) {
-        let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+    fn visit_capsules(&self, line: &Line, hi: f64, r: f64, f: impl FnMut(usize, f64) -> f64) {
         let rr2 = r * r;
         let start = line.o + line.lo * line.n;
-        self.walk(|a, b, first, count| {
-            if !segment_box(line.o, inv, a, b, line.lo, hi) {
-                return count > 0;
-            }
+        let clear = |a: DVec3, b: DVec3, hi: f64| {
             // The box of the node's centres' segments: its box shrunk by `r`, less a margin
             // for the rounding of the growth.
             let eps = 1e-9 * (1.0 + r + a.abs().max(b.abs()).max_element());
             let (ca, cb) = (a + (r - eps), b - (r - eps));
-            if clear_of_box(start, line.n, ca, cb, rr2)
+            clear_of_box(start, line.n, ca, cb, rr2)
                 || clear_of_box(line.o + hi * line.n, -line.n, ca, cb, rr2)
-            {
-                return count > 0;
-            }
-            for ci in first as usize..(first + count) as usize {
-                if self.reaches(ci, line, inv, hi, count == 1) {
-                    hi = f(ci, hi);
-                }
-            }
-            true
-        });
+        };
+        self.visit_unless(line, hi, clear, f);
     }
 
     /// Calls `f` for every item whose bound the segment `lo..hi(current)` of `line` meets;
     /// `f` returns the new upper end of the segment.
-    fn visit(&self, line: &Line, mut hi: f64, mut f: impl FnMut(usize, f64) -> f64) {
+    fn visit(&self, line: &Line, hi: f64, f: impl FnMut(usize, f64) -> f64) {
+        self.visit_unless(line, hi, |_, _, _| false, f);
+    }
+
+    /// [`Extras::visit`], passing over the nodes (box `a..b`) for which `clear(a, b, hi)`
+    /// holds.
+    fn visit_unless(
+        &self,
+        line: &Line,
+        mut hi: f64,
+        clear: impl Fn(DVec3, DVec3, f64) -> bool,
+        mut f: impl FnMut(usize, f64) -> f64,
+    ) {
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
         self.walk(|a, b, first, count| {
-            if !segment_box(line.o, inv, a, b, line.lo, hi) {
+            if !segment_box(line.o, inv, a, b, line.lo, hi) || clear(a, b, hi) {
                 return count > 0;
             }
             // A leaf of one item: its box is the node's.
@@ -2106,7 +2100,6 @@ fn measure_vectors(
                 // of them on one thread (the dome's measure scaled 1.5x to 2 threads).
                 .with_max_len(1)
                 .map(|tile| {
-                    let mut seed = None;
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
                     let mut lay: Vec<Listed> = Vec::new();
                     let mut play: Vec<PuckListed> = Vec::new();
@@ -2130,50 +2123,43 @@ fn measure_vectors(
                     );
                     let mut out = Vec::with_capacity(tile.len());
                     let mut sum = [0usize; 5];
-                    // The moves that answered last, distinct, oldest first.
+                    // The moves that answered last, distinct, oldest first: the seeds.
                     let mut recent: Vec<u32> = Vec::with_capacity(RECENT_SEEDS);
-                    let mut keep =
-                        |i: u32, r: PerVector, seed: &mut Option<_>, recent: &mut Vec<u32>| {
-                            if let Some(mv) = r.0.source_move {
-                                *seed = seed_of(mv);
-                                if let Some(k) = recent.iter().position(|&m| m == mv) {
-                                    recent.remove(k);
-                                } else if recent.len() == RECENT_SEEDS {
-                                    recent.remove(0);
-                                }
-                                recent.push(mv);
+                    let mut keep = |i: u32, r: PerVector, recent: &mut Vec<u32>| {
+                        if let Some(mv) = r.0.source_move {
+                            if let Some(k) = recent.iter().position(|&m| m == mv) {
+                                recent.remove(k);
+                            } else if recent.len() == RECENT_SEEDS {
+                                recent.remove(0);
                             }
-                            add(&mut sum, &r.4);
-                            out.push((i, Reading::of(&r)));
-                        };
+                            recent.push(mv);
+                        }
+                        add(&mut sum, &r.4);
+                        out.push((i, Reading::of(&r)));
+                    };
                     for group in tile.chunks(DIRECT_GROUP) {
-                        // A vector's entry into its seed's move (or, where that misses, into
-                        // the first of the other recent moves it enters) bounds its search;
-                        // a vector they all miss is searched in the trees, and seeds the
-                        // next.
+                        // A vector's entry into the latest of the recent moves it enters
+                        // bounds its search; a vector they all miss is searched in the trees,
+                        // and seeds the next.
                         pending.clear();
                         for &(_, i) in group {
                             let v = &chunk[i as usize];
-                            let bound = seed.and_then(|sd| seed_entry(v, sd)).or_else(|| {
-                                let latest = seed.map(|sd| sd.0);
-                                recent
-                                    .iter()
-                                    .rev()
-                                    .filter(|&&m| Some(m) != latest)
-                                    .find_map(|&m| seed_entry(v, seed_of(m)?))
-                            });
+                            let bound = recent
+                                .iter()
+                                .rev()
+                                .find_map(|&m| seed_entry(v, seed_of(m)?));
                             match bound {
                                 Some(b) => pending.push((i, b)),
                                 None => {
                                     let r = direct_one(
                                         v,
-                                        (seed.is_some(), None),
+                                        (!recent.is_empty(), None),
                                         None,
                                         None,
                                         None,
                                         None,
                                     );
-                                    keep(i, r, &mut seed, &mut recent);
+                                    keep(i, r, &mut recent);
                                 }
                             }
                         }
@@ -2256,7 +2242,7 @@ fn measure_vectors(
                                 bull_moves,
                                 column_moves,
                             );
-                            keep(i, r, &mut seed, &mut recent);
+                            keep(i, r, &mut recent);
                         }
                     }
                     (out, sum)
