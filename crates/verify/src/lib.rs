@@ -1,4 +1,5 @@
 //! cam-verify: see `docs/architecture.md`.
+mod chains;
 pub mod column;
 pub mod depth;
 pub mod deviation;

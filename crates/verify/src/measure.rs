@@ -266,6 +266,20 @@ struct Listed {
 }
 
 impl Listed {
+    /// The segment `c0`–`c1` with radius `rr`, as item `ci` of move `mv`.
+    fn segment(ci: u32, mv: u32, c0: DVec3, c1: DVec3, rr: f64) -> Listed {
+        let d = c1 - c0;
+        Listed {
+            ci,
+            mv,
+            c0,
+            d,
+            inv_dd: inv_or_zero(d.length_squared()),
+            mid: 0.5 * (c0 + c1),
+            rho2: sphere_rho2(0.5 * c0.distance(c1), rr),
+        }
+    }
+
     fn of(volumes: &Extras, ci: u32, rr: f64) -> Listed {
         let (_, mv, c0, c1) = volumes.items[ci as usize];
         let (mid, half) = volumes.mids[ci as usize];
@@ -294,6 +308,39 @@ impl Listed {
             line.n,
             rr2,
         )
+    }
+}
+
+/// A listed run of a ball's moves ([`crate::chains`]): its chord laid out as a [`Listed`]
+/// of radius `r + slack` (squared: `rr2`), and its members, laid out after each other in
+/// the group's list of moves from `first`.
+#[derive(Clone, Copy)]
+struct RunListed {
+    chord: Listed,
+    rr2: f64,
+    first: u32,
+    count: u32,
+}
+
+impl RunListed {
+    /// Run `k` of `runs` (listed as item `ci`) for a ball of radius `rr`, its members laid
+    /// out from `first`.
+    fn of(runs: &crate::chains::Runs, k: usize, ci: u32, rr: f64, first: u32) -> RunListed {
+        let (a, b, slack) = runs.chords[k];
+        let r = rr + slack;
+        RunListed {
+            chord: Listed::segment(ci, 0, a, b, r),
+            rr2: r * r,
+            first,
+            count: runs.ranges[k].1,
+        }
+    }
+
+    /// Whether the segment `lo..hi` of `line` may enter a member's capsule
+    /// ([`Listed::may_reach`] on the run's capsule, which holds theirs).
+    #[inline]
+    fn may_reach(&self, line: &Line, hi: f64) -> bool {
+        self.chord.may_reach(line, hi, self.rr2)
     }
 }
 
@@ -1465,10 +1512,39 @@ fn measure_vectors(
         },
     );
     let rr = puck.a + puck.r;
+    let ball = puck.a == 0.0;
+    // A ball's moves in runs (`crate::chains`): the tiles and groups gather the runs, whose
+    // chords' capsules hold their members'.
+    let runs = (direct && ball).then(|| {
+        crate::chains::runs(
+            (0u32..)
+                .zip(&volumes.items)
+                .map(|(ci, &(_, mv, c0, c1))| (mv, ci, c0, c1))
+                .collect(),
+        )
+    });
+    let run_tree = match &runs {
+        Some(runs) => {
+            let pad = 1e-9 * (1.0 + rr);
+            let (items, bounds) = runs
+                .chords
+                .iter()
+                .enumerate()
+                .map(|(k, &(a, b, slack))| {
+                    let e = DVec3::splat(rr + slack + pad);
+                    ((PUCK, k as u32, a, b), (a.min(b) - e, a.max(b) + e))
+                })
+                .unzip();
+            Extras::from_items(items, bounds, 0.0)
+        }
+        None => Extras::from_items(Vec::new(), Vec::new(), 0.0),
+    };
+    let max_slack = runs
+        .as_ref()
+        .map_or(0.0, |r| r.chords.iter().fold(0.0f64, |m, c| m.max(c.2)));
     // A ball's volumes are capsules, which their bounding spheres fit well enough to test
     // listed moves by them alone; a flat end mill's and a bull's pucks are flatter than
     // their spheres, and their boxes prune more (see `Listed` and `PuckListed`).
-    let ball = puck.a == 0.0;
     let bull = puck.a > 0.0 && puck.r > 0.0;
     let move_limit = if ball {
         DIRECT_BALL_MOVES
@@ -1484,6 +1560,14 @@ fn measure_vectors(
             .max(it.3.abs().max_element())
     });
     let round = rr + 1e-9 * (1.0 + rr + scale);
+    // A run's chord lies within `r + slack` of every point of its members' capsules.
+    let run_round = round + max_slack;
+    // What the tiles and groups gather for the moves: a ball's runs, or the moves.
+    let (move_tree, move_round) = if runs.is_some() {
+        (&run_tree, run_round)
+    } else {
+        (&volumes, round)
+    };
     // Entries through a column's bottom are the puck's (found before, or by the imprint
     // surface): only sides and starts are searched. An entry less than `tie` below the best
     // found does not replace it, so boxes that reach the best only by their padding (half
@@ -1630,7 +1714,7 @@ fn measure_vectors(
     let direct_one = |v: &Vector,
                       seeded: (bool, Option<(Entry, u32)>),
                       among: Option<&[u32]>,
-                      listed: Option<&[Listed]>,
+                      listed: Option<(&[RunListed], &[Listed])>,
                       pucks_listed: Option<&[PuckListed]>,
                       columns_listed: Option<&[ColumnListed]>|
      -> PerVector {
@@ -1753,19 +1837,27 @@ fn measure_vectors(
                 found.map_or(hi, |(f, _)| f.s.min(hi))
             };
             match (listed, among) {
-                (Some(listed), _) => {
+                (Some((runs, listed)), _) => {
                     let rr2 = rr * rr;
-                    for c in listed {
+                    for run in runs {
+                        // A run the segment provably misses holds no move it enters.
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                        // The move that holds the best has had its entry computed; at the
-                        // segment's start only a lower-numbered move's tie could replace it.
-                        if found.is_some_and(|(f, m)| {
-                            m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)
-                        }) {
+                        if !run.may_reach(&line, hi) {
                             continue;
                         }
-                        if c.may_reach(&line, hi, rr2) {
-                            try_move(c.ci as usize, &mut found);
+                        for c in &listed[run.first as usize..(run.first + run.count) as usize] {
+                            let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
+                            // The move that holds the best has had its entry computed; at
+                            // the segment's start only a lower-numbered move's tie could
+                            // replace it.
+                            if found.is_some_and(|(f, m)| {
+                                m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)
+                            }) {
+                                continue;
+                            }
+                            if c.may_reach(&line, hi, rr2) {
+                                try_move(c.ci as usize, &mut found);
+                            }
                         }
                     }
                 }
@@ -2102,6 +2194,7 @@ fn measure_vectors(
                 .map(|tile| {
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
                     let mut lay: Vec<Listed> = Vec::new();
+                    let mut rlay: Vec<RunListed> = Vec::new();
                     let mut play: Vec<PuckListed> = Vec::new();
                     let mut clay: Vec<ColumnListed> = Vec::new();
                     // The moves and columns near the tile's vectors, from their starts to
@@ -2118,7 +2211,7 @@ fn measure_vectors(
                     (tlo, thi) = (tlo - tpad, thi + tpad);
                     let (mut tile_vols, mut tile_cols) = (Vec::new(), Vec::new());
                     let tile_listed = (
-                        volumes.gather(tlo, thi, round, TILE_MOVES, &mut tile_vols),
+                        move_tree.gather(tlo, thi, move_round, TILE_MOVES, &mut tile_vols),
                         columns.gather(tlo, thi, 0.0, TILE_COLUMNS, &mut tile_cols),
                     );
                     let mut out = Vec::with_capacity(tile.len());
@@ -2185,10 +2278,11 @@ fn measure_vectors(
                         let within = lo.cmpge(tlo).all() && hi.cmple(thi).all();
                         let listed = (
                             if within && tile_listed.0 {
-                                volumes
-                                    .gather_from(&tile_vols, lo, hi, round, move_limit, &mut vols)
+                                move_tree.gather_from(
+                                    &tile_vols, lo, hi, move_round, move_limit, &mut vols,
+                                )
                             } else {
-                                volumes.gather(lo, hi, round, move_limit, &mut vols)
+                                move_tree.gather(lo, hi, move_round, move_limit, &mut vols)
                             },
                             if within && tile_listed.1 {
                                 columns.gather_from(
@@ -2203,12 +2297,25 @@ fn measure_vectors(
                                 columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols)
                             },
                         );
-                        // A ball's listed moves, laid out once for the group's vectors.
-                        let moves = (ball && listed.0).then(|| {
-                            lay.clear();
-                            lay.extend(vols.iter().map(|&ci| Listed::of(&volumes, ci, rr)));
-                            &lay[..]
-                        });
+                        // A ball's listed runs and their moves, laid out once for the group's
+                        // vectors.
+                        let moves = match (&runs, listed.0) {
+                            (Some(runs), true) => {
+                                lay.clear();
+                                rlay.clear();
+                                for &ci in &vols {
+                                    let k = run_tree.items[ci as usize].1 as usize;
+                                    rlay.push(RunListed::of(runs, k, ci, rr, lay.len() as u32));
+                                    let (first, count) = runs.ranges[k];
+                                    let members = &runs.members[first as usize..][..count as usize];
+                                    lay.extend(
+                                        members.iter().map(|&m| Listed::of(&volumes, m, rr)),
+                                    );
+                                }
+                                Some((&rlay[..], &lay[..]))
+                            }
+                            _ => None,
+                        };
                         // The listed columns, likewise. Every move of a program searched
                         // here keeps its axis; were one not to, the group's vectors would
                         // walk the column tree instead.
@@ -2233,7 +2340,8 @@ fn measure_vectors(
                             &play[..]
                         });
                         for &(i, b) in &pending {
-                            let among = listed.0.then_some(&vols[..]);
+                            // A ball's list holds runs, not moves.
+                            let among = (listed.0 && runs.is_none()).then_some(&vols[..]);
                             let r = direct_one(
                                 &chunk[i as usize],
                                 (true, Some(b)),
@@ -2351,6 +2459,73 @@ mod tests {
 
     fn v3() -> impl Strategy<Value = DVec3> {
         (coord(), coord(), coord()).prop_map(|(x, y, z)| DVec3::new(x, y, z))
+    }
+
+    proptest! {
+        /// A run a segment is turned away from holds no move whose capsule the segment
+        /// enters. Passes along arcs (radius 4 to 30 mm, moves 0.3 to 1 mm, runs bulging
+        /// off their chords by up to the slack), segments ending within 0.1 mm of the
+        /// swept surface at a random member's point, in random directions.
+        #[test]
+        fn a_run_turned_away_holds_no_move_entered(
+            radius in 4.0..30.0f64,
+            step in 0.3..1.0f64,
+            tilt in (-1.0..1.0f64, -1.0..1.0f64, 0.2..1.0f64),
+            picks in prop::collection::vec(
+                (0.0..1.0f64, 0.0..1.0f64, (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+                 (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64), 0.0..0.1f64, 0.0..3.0f64),
+                64),
+        ) {
+            let rr = 3.0;
+            let up = DVec3::new(tilt.0, tilt.1, tilt.2).normalize();
+            let u = up.any_orthonormal_vector();
+            let at = |i: usize| {
+                let t = i as f64 * step / radius;
+                radius * (t.sin() * u + (t.cos() - 1.0) * up)
+            };
+            let moves: Vec<(u32, u32, DVec3, DVec3)> =
+                (0..40).map(|i| (i as u32 + 1, i as u32, at(i), at(i + 1))).collect();
+            let runs = crate::chains::runs(moves.clone());
+            let mut turned = 0usize;
+            for (i, &(which, along, dir, n, off, len)) in picks.iter().enumerate() {
+                // Every other point outside the member's capsule, the others inside.
+                let off = if i % 2 == 0 { off.abs() } else { -off.abs() };
+                let k = ((which * runs.ranges.len() as f64) as usize).min(runs.ranges.len() - 1);
+                let run = RunListed::of(&runs, k, 0, rr, 0);
+                let (first, count) = runs.ranges[k];
+                let members = &runs.members[first as usize..(first + count) as usize];
+                let (dir, n) = (DVec3::new(dir.0, dir.1, dir.2), DVec3::new(n.0, n.1, n.2));
+                if dir.length() < 1e-3 || n.length() < 1e-3 {
+                    continue;
+                }
+                // A point within 0.1 mm of a member's capsule surface (off its segment
+                // across it); the segment ends there.
+                let pick = ((along * count as f64) as usize).min(count as usize - 1);
+                let m = moves[members[pick] as usize];
+                let t = (m.3 - m.2).normalize();
+                let across = dir - dir.dot(t) * t;
+                if across.length() < 1e-3 {
+                    continue;
+                }
+                let dir = across.normalize();
+                let q = m.2.lerp(m.3, along) + (rr + off) * dir;
+                // Coming in towards the member, mostly.
+                let n = (0.5 * n.normalize() - dir).normalize();
+                let line = Line { o: q - len * n, n, lo: 0.0, hi: len };
+                if run.may_reach(&line, len) {
+                    continue;
+                }
+                turned += 1;
+                for &ci in members {
+                    let (_, _, c0, c1) = moves[ci as usize];
+                    prop_assert!(
+                        crate::exact::capsule_entry(&line, c0, c1, rr).is_none(),
+                        "run {} turned away a segment entering its move {}", k, ci
+                    );
+                }
+            }
+            prop_assert!(turned > 0);
+        }
     }
 
     proptest! {
