@@ -313,7 +313,7 @@ impl Listed {
 
 /// A listed run of a ball's moves ([`crate::chains`]): its chord laid out as a [`Listed`]
 /// of radius `r + slack` (squared: `rr2`), and its members, laid out after each other in
-/// the group's list of moves from `first`.
+/// the list of every run's members (in the order of `Runs::members`) from `first`.
 #[derive(Clone, Copy)]
 struct RunListed {
     chord: Listed,
@@ -323,13 +323,12 @@ struct RunListed {
 }
 
 impl RunListed {
-    /// Run `k` of `runs` (listed as item `ci`) for a ball of radius `rr`, its members laid
-    /// out from `first`.
-    fn of(runs: &crate::chains::Runs, k: usize, ci: u32, rr: f64, first: u32) -> RunListed {
+    /// Run `k` of `runs` for a ball of radius `rr`, its members laid out from `first`.
+    fn of(runs: &crate::chains::Runs, k: usize, rr: f64, first: u32) -> RunListed {
         let (a, b, slack) = runs.chords[k];
         let r = rr + slack;
         RunListed {
-            chord: Listed::segment(ci, 0, a, b, r),
+            chord: Listed::segment(k as u32, 0, a, b, r),
             rr2: r * r,
             first,
             count: runs.ranges[k].1,
@@ -1539,6 +1538,29 @@ fn measure_vectors(
         }
         None => Extras::from_items(Vec::new(), Vec::new(), 0.0),
     };
+    // Laid out once for every group that lists them: each run (by its index in `runs`),
+    // its members (in the order of `runs.members`) and each column (by item, `None` for a
+    // rotating move's).
+    let (run_lay, member_lay): (Vec<RunListed>, Vec<Listed>) = match &runs {
+        Some(r) => (
+            (0..r.ranges.len())
+                .map(|k| RunListed::of(r, k, rr, r.ranges[k].0))
+                .collect(),
+            r.members
+                .par_iter()
+                .map(|&m| Listed::of(&volumes, m, rr))
+                .collect(),
+        ),
+        None => (Vec::new(), Vec::new()),
+    };
+    let column_lay: Vec<Option<ColumnListed>> = if direct {
+        (0..columns.items.len() as u32)
+            .into_par_iter()
+            .map(|ci| ColumnListed::of(&columns, ci, toolpath))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let max_slack = runs
         .as_ref()
         .map_or(0.0, |r| r.chords.iter().fold(0.0f64, |m, c| m.max(c.2)));
@@ -2166,6 +2188,15 @@ fn measure_vectors(
             (None, None) => (dev(None, None), 0.0, None, None, stats),
         }
     };
+    // A bull's moves laid out once likewise, by item.
+    let puck_lay: Vec<PuckListed> = if direct && bull {
+        (0..volumes.items.len() as u32)
+            .into_par_iter()
+            .map(|ci| PuckListed::of(&volumes, ci, rr, axis_of(volumes.items[ci as usize].1)))
+            .collect()
+    } else {
+        Vec::new()
+    };
     // In chunks, for progress; each vector's answer depends on the vector alone. Kept
     // compact (the vector's position and normal are put back at the end) and the counts
     // summed per tile: these records are copied and placed, and at several hundred
@@ -2193,7 +2224,6 @@ fn measure_vectors(
                 .with_max_len(1)
                 .map(|tile| {
                     let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
-                    let mut lay: Vec<Listed> = Vec::new();
                     let mut rlay: Vec<RunListed> = Vec::new();
                     let mut play: Vec<PuckListed> = Vec::new();
                     let mut clay: Vec<ColumnListed> = Vec::new();
@@ -2297,25 +2327,15 @@ fn measure_vectors(
                                 columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols)
                             },
                         );
-                        // A ball's listed runs and their moves, laid out once for the group's
-                        // vectors.
-                        let moves = match (&runs, listed.0) {
-                            (Some(runs), true) => {
-                                lay.clear();
-                                rlay.clear();
-                                for &ci in &vols {
-                                    let k = run_tree.items[ci as usize].1 as usize;
-                                    rlay.push(RunListed::of(runs, k, ci, rr, lay.len() as u32));
-                                    let (first, count) = runs.ranges[k];
-                                    let members = &runs.members[first as usize..][..count as usize];
-                                    lay.extend(
-                                        members.iter().map(|&m| Listed::of(&volumes, m, rr)),
-                                    );
-                                }
-                                Some((&rlay[..], &lay[..]))
-                            }
-                            _ => None,
-                        };
+                        // A ball's listed runs (their members laid out once for all groups).
+                        let moves = (runs.is_some() && listed.0).then(|| {
+                            rlay.clear();
+                            rlay.extend(
+                                vols.iter()
+                                    .map(|&ci| run_lay[run_tree.items[ci as usize].1 as usize]),
+                            );
+                            (&rlay[..], &member_lay[..])
+                        });
                         // The listed columns, likewise. Every move of a program searched
                         // here keeps its axis; were one not to, the group's vectors would
                         // walk the column tree instead.
@@ -2323,20 +2343,14 @@ fn measure_vectors(
                             .1
                             .then(|| {
                                 clay.clear();
-                                clay.extend(
-                                    cols.iter()
-                                        .map_while(|&ci| ColumnListed::of(&columns, ci, toolpath)),
-                                );
+                                clay.extend(cols.iter().map_while(|&ci| column_lay[ci as usize]));
                                 &clay[..]
                             })
                             .filter(|c| c.len() == cols.len());
                         // A bull's, likewise.
                         let bull_moves = (bull && listed.0).then(|| {
                             play.clear();
-                            play.extend(vols.iter().map(|&ci| {
-                                let k = axis_of(volumes.items[ci as usize].1);
-                                PuckListed::of(&volumes, ci, rr, k)
-                            }));
+                            play.extend(vols.iter().map(|&ci| puck_lay[ci as usize]));
                             &play[..]
                         });
                         for &(i, b) in &pending {
@@ -2491,7 +2505,7 @@ mod tests {
                 // Every other point outside the member's capsule, the others inside.
                 let off = if i % 2 == 0 { off.abs() } else { -off.abs() };
                 let k = ((which * runs.ranges.len() as f64) as usize).min(runs.ranges.len() - 1);
-                let run = RunListed::of(&runs, k, 0, rr, 0);
+                let run = RunListed::of(&runs, k, rr, 0);
                 let (first, count) = runs.ranges[k];
                 let members = &runs.members[first as usize..(first + count) as usize];
                 let (dir, n) = (DVec3::new(dir.0, dir.1, dir.2), DVec3::new(n.0, n.1, n.2));
