@@ -813,6 +813,9 @@ struct Extras {
     /// Per item: the middle of its centres' segment and half that segment's length (mm),
     /// for [`near_capsule`].
     mids: Vec<(DVec3, f64)>,
+    /// Per item: its centres' segment's unit direction (`+x` for a point) and length (mm),
+    /// for [`Extras::near_box`].
+    axes: Vec<(DVec3, f64)>,
     /// Nodes: box and, for a leaf, the item range; inner nodes point at two children.
     nodes: Vec<(DVec3, DVec3, u32, u32)>,
     radius: f64,
@@ -1001,10 +1004,19 @@ impl Extras {
             .iter()
             .map(|&(_, _, c0, c1)| (0.5 * (c0 + c1), 0.5 * c0.distance(c1)))
             .collect();
+        let axes = items
+            .iter()
+            .map(|&(_, _, c0, c1)| {
+                let d = c1 - c0;
+                let len = d.length();
+                (if len > 0.0 { d / len } else { DVec3::X }, len)
+            })
+            .collect();
         let mut e = Extras {
             items,
             bounds,
             mids,
+            axes,
             nodes: Vec::new(),
             radius,
         };
@@ -1138,12 +1150,16 @@ impl Extras {
         if gap.length_squared() > reach * reach {
             return false;
         }
+        // Then its ends: one within `round` decides it (most of those the sphere passes).
         let (_, _, c0, c1) = self.items[ci as usize];
-        let d = c1 - c0;
-        let len = d.length();
+        let off = |p: DVec3| (p - p.clamp(lo, hi)).length_squared();
+        if off(c0) <= round * round || off(c1) <= round * round {
+            return true;
+        }
+        let (n, len) = self.axes[ci as usize];
         let axis = Line {
             o: c0,
-            n: if len > 0.0 { d / len } else { DVec3::X },
+            n,
             lo: 0.0,
             hi: len,
         };
@@ -2622,6 +2638,44 @@ mod tests {
             // Points of the box: fractions in 0..=1 per axis (`v3` spans -2..2).
             let at = |f: DVec3| lo + (hi - lo) * ((f + 2.0) / 4.0).clamp(DVec3::ZERO, DVec3::ONE);
             clear_of_the_capsule(&line, at(f0), at(f1), rr)?;
+        }
+    }
+
+    proptest! {
+        /// `Extras::near_box` lists a segment exactly when it passes within `round` of the
+        /// box: never when every point lies farther (the distance to the box sampled at
+        /// 2001 points along it, less what the sampling can miss), always when a sampled
+        /// point lies within.
+        #[test]
+        fn near_box_decides_by_the_distance_to_the_box(
+            c0 in v3(),
+            d in prop_oneof![Just(DVec3::ZERO), v3()],
+            a in v3(),
+            b in v3(),
+            round in 0.0..1.5f64,
+        ) {
+            let c1 = c0 + d;
+            let e = Extras::from_items(
+                vec![(PUCK, 1, c0, c1)],
+                vec![(c0.min(c1) - round, c0.max(c1) + round)],
+                0.0,
+            );
+            let (lo, hi) = (a.min(b), a.max(b));
+            let dist = (0..=2000)
+                .map(|i| {
+                    let p = c0.lerp(c1, i as f64 / 2000.0);
+                    (p - p.clamp(lo, hi)).length()
+                })
+                .fold(f64::INFINITY, f64::min);
+            // Between samples the distance to the box falls by at most half their spacing.
+            let miss = 0.5 * d.length() / 2000.0;
+            let near = e.near_box(0, lo, hi, round);
+            if dist <= round {
+                prop_assert!(near, "a point {dist} from the box, within {round}: not listed");
+            }
+            if dist - miss > round * (1.0 + 1e-9) {
+                prop_assert!(!near, "every point beyond {round} (least {dist}): listed");
+            }
         }
     }
 
