@@ -317,7 +317,7 @@ pub fn summary_line(v: &Verification, tol: f64) -> String {
         r.settings
             .as_ref()
             .map_or(f64::NAN, |s| s.deviation.outside_mm),
-        v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s + v.timings.rapids_s
+        v.timings.sweep_s + v.timings.refine_s + v.timings.measure_s
     )
 }
 

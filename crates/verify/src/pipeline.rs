@@ -99,11 +99,13 @@ pub enum VerifyError {
 pub struct Timings {
     /// Sweeping (forward and reverse).
     pub sweep_s: f64,
-    /// Refining the design surface.
+    /// Refining the design surface (and, beside it, checking the rapids and building the
+    /// part's tree).
     pub refine_s: f64,
     /// Growing and cutting the vectors.
     pub measure_s: f64,
-    /// Checking the rapids against the part.
+    /// Checking the rapids against the part: its own time, spent beside the refinement
+    /// (within `refine_s`).
     pub rapids_s: f64,
 }
 
@@ -556,8 +558,29 @@ pub fn verify_with_progress(
     // wall), where the swept surface of a pass along that face is tangent and any rounding
     // reads as a gouge. The bisector points into the material.
     rcfg.crease_angle_deg = 180.0;
-    let refined = refine::refine(part, &rcfg)?;
-    let (topology, unoriented_tris) = refine::topology_and_unoriented(part);
+    // The part's topology, its triangles' tree (for the vectors' material checks and the
+    // depths at edges) and the rapids' check need neither the refinement nor each other:
+    // they run beside it, on what its serial stretches leave of the threads.
+    let (refined, ((topology, unoriented_tris), part_bvh, (rapids, rapids_s))) = rayon::join(
+        || refine::refine(part, &rcfg),
+        || {
+            let ((topo, bvh), rapids) = rayon::join(
+                || {
+                    rayon::join(
+                        || refine::topology_and_unoriented(part),
+                        || TriangleBvh::new(part.triangles()),
+                    )
+                },
+                || {
+                    let t = Instant::now();
+                    let r = rapids::check_rapids(part, cutter, toolpath, tol);
+                    (r, t.elapsed().as_secs_f64())
+                },
+            );
+            (topo, bvh, rapids)
+        },
+    );
+    let refined = refined?;
     // Refined vertices on a face next to a misoriented or non-manifold edge.
     let mut unoriented = vec![false; refined.len()];
     for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
@@ -583,8 +606,6 @@ pub fn verify_with_progress(
         cfg.surface,
         &measure_progress,
     )?;
-    // The part's triangles, for the vectors' material checks and the depths at edges.
-    let part_bvh = TriangleBvh::new(part.triangles());
     let inner = clip_to_material(
         &part_bvh, &refined, &models, toolpath, cfg, &topology, &mut m,
     )?;
@@ -652,9 +673,7 @@ pub fn verify_with_progress(
         extra,
     };
     let report = report::build_report(&devs, &lines, &ReportConfig::new(tol), Some(settings));
-    let t = Instant::now();
-    let rapids = rapids::check_rapids(part, cutter, toolpath, tol);
-    timings.rapids_s = t.elapsed().as_secs_f64();
+    timings.rapids_s = rapids_s;
     Ok(Verification {
         report,
         refined,
