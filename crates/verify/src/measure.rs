@@ -446,6 +446,54 @@ impl ColumnListed {
     }
 }
 
+/// A ball's moves in runs ([`crate::chains`]): the tiles and groups gather the runs, whose
+/// chords' capsules hold their members'. The runs, their tree (items `(PUCK, run, chord's
+/// ends)` boxed by the chord grown by `r + slack`), and, laid out once for every group that
+/// lists them, each run (by its index) and its members (in the order of `Runs::members`).
+struct BallRuns {
+    runs: crate::chains::Runs,
+    tree: Extras,
+    lay: Vec<RunListed>,
+    members: Vec<Listed>,
+}
+
+impl BallRuns {
+    /// The runs of the moves in `volumes`, for a ball of radius `rr`.
+    fn of(volumes: &Extras, rr: f64) -> BallRuns {
+        let runs = crate::chains::runs(
+            (0u32..)
+                .zip(&volumes.items)
+                .map(|(ci, &(_, mv, c0, c1))| (mv, ci, c0, c1))
+                .collect(),
+        );
+        let pad = 1e-9 * (1.0 + rr);
+        let (items, bounds) = runs
+            .chords
+            .iter()
+            .enumerate()
+            .map(|(k, &(a, b, slack))| {
+                let e = DVec3::splat(rr + slack + pad);
+                ((PUCK, k as u32, a, b), (a.min(b) - e, a.max(b) + e))
+            })
+            .unzip();
+        let tree = Extras::from_items(items, bounds, 0.0);
+        let lay = (0..runs.ranges.len())
+            .map(|k| RunListed::of(&runs, k, rr, runs.ranges[k].0))
+            .collect();
+        let members = runs
+            .members
+            .par_iter()
+            .map(|&m| Listed::of(volumes, m, rr))
+            .collect();
+        BallRuns {
+            runs,
+            tree,
+            lay,
+            members,
+        }
+    }
+}
+
 /// How far below the best entry a column's entry must lie to replace it (mm; see
 /// `column_entry` in `measure_vectors`), for a cutter of reach `rr`.
 fn column_tie(rr: f64) -> f64 {
@@ -1511,7 +1559,10 @@ fn measure_vectors(
         },
     );
     // Three independent trees: built side by side.
-    let ((columns, pucks), volumes) = rayon::join(
+    let rr = puck.a + puck.r;
+    let ball = puck.a == 0.0;
+    // A ball's moves in runs too (see `BallRuns`), after its volumes.
+    let ((columns, pucks), (volumes, ball_runs)) = rayon::join(
         || {
             rayon::join(
                 || Extras::columns(models, toolpath, reach),
@@ -1520,55 +1571,25 @@ fn measure_vectors(
         },
         || {
             if direct {
-                Extras::volumes(toolpath, puck)
+                let volumes = Extras::volumes(toolpath, puck);
+                let runs = ball.then(|| BallRuns::of(&volumes, rr));
+                (volumes, runs)
             } else {
-                Extras::from_items(Vec::new(), Vec::new(), 0.0)
+                (Extras::from_items(Vec::new(), Vec::new(), 0.0), None)
             }
         },
     );
-    let rr = puck.a + puck.r;
-    let ball = puck.a == 0.0;
-    // A ball's moves in runs (`crate::chains`): the tiles and groups gather the runs, whose
-    // chords' capsules hold their members'.
-    let runs = (direct && ball).then(|| {
-        crate::chains::runs(
-            (0u32..)
-                .zip(&volumes.items)
-                .map(|(ci, &(_, mv, c0, c1))| (mv, ci, c0, c1))
-                .collect(),
-        )
-    });
-    let run_tree = match &runs {
-        Some(runs) => {
-            let pad = 1e-9 * (1.0 + rr);
-            let (items, bounds) = runs
-                .chords
-                .iter()
-                .enumerate()
-                .map(|(k, &(a, b, slack))| {
-                    let e = DVec3::splat(rr + slack + pad);
-                    ((PUCK, k as u32, a, b), (a.min(b) - e, a.max(b) + e))
-                })
-                .unzip();
-            Extras::from_items(items, bounds, 0.0)
-        }
-        None => Extras::from_items(Vec::new(), Vec::new(), 0.0),
-    };
-    // Laid out once for every group that lists them: each run (by its index in `runs`),
-    // its members (in the order of `runs.members`) and each column (by item, `None` for a
-    // rotating move's).
-    let (run_lay, member_lay): (Vec<RunListed>, Vec<Listed>) = match &runs {
-        Some(r) => (
-            (0..r.ranges.len())
-                .map(|k| RunListed::of(r, k, rr, r.ranges[k].0))
-                .collect(),
-            r.members
-                .par_iter()
-                .map(|&m| Listed::of(&volumes, m, rr))
-                .collect(),
+    let (runs, run_tree, run_lay, member_lay) = match ball_runs {
+        Some(b) => (Some(b.runs), b.tree, b.lay, b.members),
+        None => (
+            None,
+            Extras::from_items(Vec::new(), Vec::new(), 0.0),
+            Vec::new(),
+            Vec::new(),
         ),
-        None => (Vec::new(), Vec::new()),
     };
+    // Each column laid out once for every group that lists it (by item; `None` for a
+    // rotating move's).
     let column_lay: Vec<Option<ColumnListed>> = if direct {
         (0..columns.items.len() as u32)
             .into_par_iter()
