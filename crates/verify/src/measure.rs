@@ -1219,7 +1219,7 @@ impl Extras {
     /// positive, only those whose centres' segment also lies within `round` of that box.
     /// Stops, returning `false`, once `out` holds more than `limit` items.
     fn gather(&self, lo: DVec3, hi: DVec3, round: f64, limit: usize, out: &mut Vec<u32>) -> bool {
-        let meets = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
+        let meets = |a: DVec3, b: DVec3| boxes_meet(a, b, lo, hi);
         let near = |ci: u32| self.near_box(ci, lo, hi, round);
         let mut room = true;
         self.walk(|a, b, first, count| {
@@ -1253,7 +1253,7 @@ impl Extras {
         limit: usize,
         out: &mut Vec<u32>,
     ) -> bool {
-        let meets = |a: DVec3, b: DVec3| a.cmple(hi).all() && b.cmpge(lo).all();
+        let meets = |a: DVec3, b: DVec3| boxes_meet(a, b, lo, hi);
         for &ci in from {
             let (bl, bh) = self.bounds[ci as usize];
             if meets(bl, bh) && (round <= 0.0 || self.near_box(ci, lo, hi, round)) {
@@ -1297,6 +1297,13 @@ fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -
         return segment_box_axes(o, inv, min, max, t0, t1);
     }
     slabs_meet(ta, tb, t0, t1)
+}
+
+/// Whether the boxes `a..=b` and `lo..=hi` share a point: a segment's box against an item's
+/// before the slab test ([`segment_box_of`]), comparisons where that divides.
+#[inline(always)]
+fn boxes_meet(a: DVec3, b: DVec3, lo: DVec3, hi: DVec3) -> bool {
+    a.cmple(hi).all() && b.cmpge(lo).all()
 }
 
 /// Whether the slabs' intervals `ta..tb` (per axis, either order) and `t0..t1` share a point.
@@ -1676,8 +1683,14 @@ fn measure_vectors(
         let mut hi = found.map_or(hi, |(e, _)| e.s) - tie;
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
         let finite = inv.is_finite();
+        // The segment's box (to `hi` as it stands now: it only shrinks) against each
+        // column's first: comparisons where the slab test divides.
+        let (p0, p1) = (line.o + line.lo * line.n, line.o + hi * line.n);
+        let (slo, shi) = (p0.min(p1), p0.max(p1));
         for c in listed {
-            if !segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi) {
+            if !(boxes_meet(c.bl, c.bh, slo, shi)
+                && segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi))
+            {
                 continue;
             }
             *tests += 1;
@@ -1858,9 +1871,15 @@ fn measure_vectors(
                     let finite = inv.is_finite();
                     // The line seen along the programme's one axis, if it has one.
                     let along = common_axis.map(|k| (line.o.dot(k), line.n.dot(k)));
+                    // The segment's box to `hi0` (it only shrinks) against each move's
+                    // first, as for the columns.
+                    let (p0, p1) = (line.o + line.lo * line.n, line.o + hi0 * line.n);
+                    let (slo, shi) = (p0.min(p1), p0.max(p1));
                     for c in listed {
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                        if !segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi) {
+                        if !(boxes_meet(c.bl, c.bh, slo, shi)
+                            && segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi))
+                        {
                             continue;
                         }
                         if !meets_sphere(&line, hi, c.mid, c.rho2) {
