@@ -1172,8 +1172,11 @@ impl Extras {
         mut f: impl FnMut(usize, f64) -> f64,
     ) {
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        let (slo, shi) = segment_bounds(line, hi);
         self.walk(|a, b, first, count| {
-            if !segment_box(line.o, inv, a, b, line.lo, hi) || clear(a, b, hi) {
+            if !(boxes_meet(a, b, slo, shi) && segment_box(line.o, inv, a, b, line.lo, hi))
+                || clear(a, b, hi)
+            {
                 return count > 0;
             }
             // A leaf of one item: its box is the node's.
@@ -1277,8 +1280,10 @@ impl Extras {
         mut f: impl FnMut(usize, f64) -> f64,
     ) {
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
+        let (slo, shi) = segment_bounds(line, hi);
         for &ci in among {
-            if self.reaches(ci as usize, line, inv, hi, false) {
+            let (bl, bh) = self.bounds[ci as usize];
+            if boxes_meet(bl, bh, slo, shi) && self.reaches(ci as usize, line, inv, hi, false) {
                 hi = f(ci as usize, hi);
             }
         }
@@ -1297,6 +1302,17 @@ fn segment_box(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -
         return segment_box_axes(o, inv, min, max, t0, t1);
     }
     slabs_meet(ta, tb, t0, t1)
+}
+
+/// The box of the segment `lo..hi` of `line` (everything where an end is not finite): the
+/// box of every shorter segment from `lo`, for [`boxes_meet`].
+fn segment_bounds(line: &Line, hi: f64) -> (DVec3, DVec3) {
+    let (p, q) = (line.o + line.lo * line.n, line.o + hi * line.n);
+    if p.is_finite() && q.is_finite() {
+        (p.min(q), p.max(q))
+    } else {
+        (DVec3::NEG_INFINITY, DVec3::INFINITY)
+    }
 }
 
 /// Whether the boxes `a..=b` and `lo..=hi` share a point: a segment's box against an item's
@@ -1685,8 +1701,7 @@ fn measure_vectors(
         let finite = inv.is_finite();
         // The segment's box (to `hi` as it stands now: it only shrinks) against each
         // column's first: comparisons where the slab test divides.
-        let (p0, p1) = (line.o + line.lo * line.n, line.o + hi * line.n);
-        let (slo, shi) = (p0.min(p1), p0.max(p1));
+        let (slo, shi) = segment_bounds(line, hi);
         for c in listed {
             if !(boxes_meet(c.bl, c.bh, slo, shi)
                 && segment_box_of(finite, line.o, inv, c.bl, c.bh, line.lo, hi))
@@ -1873,8 +1888,7 @@ fn measure_vectors(
                     let along = common_axis.map(|k| (line.o.dot(k), line.n.dot(k)));
                     // The segment's box to `hi0` (it only shrinks) against each move's
                     // first, as for the columns.
-                    let (p0, p1) = (line.o + line.lo * line.n, line.o + hi0 * line.n);
-                    let (slo, shi) = (p0.min(p1), p0.max(p1));
+                    let (slo, shi) = segment_bounds(&line, hi0);
                     for c in listed {
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
                         if !(boxes_meet(c.bl, c.bh, slo, shi)
