@@ -2440,19 +2440,19 @@ fn measure_vectors(
                     (out, sum)
                 })
                 .collect();
-            // Back in the vectors' order: each index once, placed.
-            let mut placed: Vec<Option<Reading>> = vec![None; chunk.len()];
-            for (out, sum) in done {
-                add(&mut stats, &sum);
-                for (i, r) in out {
-                    placed[i as usize] = Some(r);
+            // Back in the vectors' order: where each index's reading lies (its tile, its
+            // place there), then the readings gathered in parallel.
+            let mut at = vec![(u32::MAX, 0u32); chunk.len()];
+            for (t, (out, sum)) in done.iter().enumerate() {
+                add(&mut stats, sum);
+                for (k, &(i, _)) in out.iter().enumerate() {
+                    at[i as usize] = (t as u32, k as u32);
                 }
             }
-            readings.extend(
-                placed
-                    .into_iter()
-                    .map(|r| r.expect("every vector of the chunk measured once")),
-            );
+            readings.par_extend(at.par_iter().map(|&(t, k)| {
+                assert!(t != u32::MAX, "every vector of the chunk measured once");
+                done[t as usize].0[k as usize].1
+            }));
         } else {
             let found = find(chunk);
             let per: Vec<(Reading, [usize; 5])> = chunk
@@ -2472,23 +2472,24 @@ fn measure_vectors(
             p(readings.len(), vectors.len());
         }
     }
-    let mut deviations = Vec::with_capacity(readings.len());
-    let mut facing = Vec::with_capacity(readings.len());
-    let mut linear_mm = Vec::with_capacity(readings.len());
-    let mut source = Vec::with_capacity(readings.len());
-    let mut from_start = Vec::with_capacity(readings.len());
-    for (r, v) in readings.iter().zip(vectors) {
-        deviations.push(Deviation {
+    let deviations = readings
+        .par_iter()
+        .zip(vectors)
+        .map(|(r, v)| Deviation {
             position: v.o,
             normal: v.n,
             signed_mm: r.signed_mm,
             source_move: r.source_move,
-        });
-        facing.push(r.facing);
-        linear_mm.push(r.linear_mm);
-        source.push(r.source);
-        from_start.push(r.signed_mm == Some(v.lo));
-    }
+        })
+        .collect();
+    let facing = readings.par_iter().map(|r| r.facing).collect();
+    let linear_mm = readings.par_iter().map(|r| r.linear_mm).collect();
+    let source = readings.par_iter().map(|r| r.source).collect();
+    let from_start = readings
+        .par_iter()
+        .zip(vectors)
+        .map(|(r, v)| r.signed_mm == Some(v.lo))
+        .collect();
     Measurement {
         deviations,
         facing,
