@@ -252,7 +252,7 @@ fn crease_depths(
     devs: &mut [Deviation],
     m: &measure::Measurement,
     exact: Option<(&[&SweepModel], &Toolpath)>,
-    open: bool,
+    rim: Option<&[u8]>,
     part: &TriangleBvh,
     design: &[cam_core::Triangle],
     unoriented: &[bool],
@@ -261,10 +261,9 @@ fn crease_depths(
     // A design face each vertex lies in: the source of a refined face around it.
     let mut own = vec![u32::MAX; refined.positions.len()];
     // The rim of an open mesh: vertices on an edge of one face.
-    let on_rim = if open {
-        refine::rim_vertices(refined)
-    } else {
-        vec![false; refined.positions.len()]
+    let on_rim = match rim {
+        Some(rim) => refine::rim_vertices_near(refined, rim),
+        None => vec![false; refined.positions.len()],
     };
     // Face normals in parallel; the per-vertex minimum in order.
     let face_n: Vec<Option<DVec3>> = refined
@@ -561,13 +560,18 @@ pub fn verify_with_progress(
     // The part's topology, its triangles' tree (for the vectors' material checks and the
     // depths at edges) and the rapids' check need neither the refinement nor each other:
     // they run beside it, on what its serial stretches leave of the threads.
-    let (refined, ((topology, unoriented_tris), part_bvh, (rapids, rapids_s))) = rayon::join(
+    let (refined, ((topology, unoriented_tris, rim), part_bvh, (rapids, rapids_s))) = rayon::join(
         || refine::refine(part, &rcfg),
         || {
             let ((topo, bvh), rapids) = rayon::join(
                 || {
                     rayon::join(
-                        || refine::topology_and_unoriented(part),
+                        || {
+                            let (topo, unoriented) = refine::topology_and_unoriented(part);
+                            // An open part's triangles on and next to its rim.
+                            let rim = (topo.boundary_edges > 0).then(|| refine::rim_faces(part));
+                            (topo, unoriented, rim)
+                        },
                         || TriangleBvh::new(part.triangles()),
                     )
                 },
@@ -616,7 +620,7 @@ pub fn verify_with_progress(
         &mut devs,
         &m,
         exact,
-        topology.boundary_edges > 0,
+        rim.as_deref(),
         &part_bvh,
         part.triangles(),
         &unoriented,

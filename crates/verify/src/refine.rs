@@ -314,6 +314,72 @@ pub fn rim_vertices(refined: &RefinedMesh) -> Vec<bool> {
     rim
 }
 
+/// Per design triangle (in `Mesh::triangles` order): 2 where one of its edges is a boundary
+/// edge (used by it alone), 1 where it shares an edge with such a triangle, else 0; for
+/// [`rim_vertices_near`].
+pub fn rim_faces(mesh: &Mesh) -> Vec<u8> {
+    let (_, tris) = weld(mesh);
+    let uses = edge_uses(&tris);
+    let n = |a: u32, b: u32| uses.get(&edge_key(a, b)).map_or(0, |u| u.0);
+    let edges = |t: &[u32; 3]| {
+        let t = *t;
+        (0..3).map(move |k| (t[k], t[(k + 1) % 3]))
+    };
+    let mut level: Vec<u8> = tris
+        .iter()
+        .map(|t| u8::from(edges(t).any(|(a, b)| a != b && n(a, b) == 1)) * 2)
+        .collect();
+    let near: std::collections::HashSet<u64, BuildHasherDefault<IntHasher>> = tris
+        .iter()
+        .zip(&level)
+        .filter(|&(_, &l)| l == 2)
+        .flat_map(|(t, _)| edges(t).map(|(a, b)| edge_key(a, b)))
+        .collect();
+    for (t, l) in tris.iter().zip(&mut level) {
+        if *l == 0 && edges(t).any(|(a, b)| near.contains(&edge_key(a, b))) {
+            *l = 1;
+        }
+    }
+    level
+}
+
+/// [`rim_vertices`] of a refinement of the design whose [`rim_faces`] are `rim`, counting
+/// only the refined faces of design triangles on or next to its rim: a refined edge used by
+/// one face lies on a boundary edge of the design (the refinement is conforming), and every
+/// refined edge of a triangle on the rim is counted with all its faces (they lie in that
+/// triangle or in one sharing the edge). The same vertices as [`rim_vertices`] where every
+/// refined vertex is one point of the design (no vertex split at a crease: a crease angle
+/// of 180°, as the verifier refines).
+pub fn rim_vertices_near(refined: &RefinedMesh, rim: &[u8]) -> Vec<bool> {
+    let level = |f: usize| {
+        refined
+            .face_source
+            .get(f)
+            .and_then(|&src| rim.get(src as usize))
+            .copied()
+            .unwrap_or(2)
+    };
+    let near: Vec<[u32; 3]> = (0..refined.triangles.len())
+        .filter(|&f| level(f) > 0)
+        .map(|f| refined.triangles[f])
+        .collect();
+    let uses = edge_uses(&near);
+    let mut out = vec![false; refined.positions.len()];
+    for (f, t) in refined.triangles.iter().enumerate() {
+        if level(f) < 2 {
+            continue;
+        }
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if a != b && uses.get(&edge_key(a, b)).is_some_and(|u| u.0 == 1) {
+                out[a as usize] = true;
+                out[b as usize] = true;
+            }
+        }
+    }
+    out
+}
+
 /// Counts the boundary, non-manifold and misoriented edges of `mesh` (see [`Topology`]).
 pub fn topology(mesh: &Mesh) -> Topology {
     topology_and_unoriented(mesh).0
@@ -864,6 +930,54 @@ mod tests {
         // Closed tetrahedron: no rim.
         let tet = mesh_of(vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]], 4);
         assert_eq!(rim_vertices(&tet), vec![false; 4]);
+    }
+
+    /// On refined open meshes the rim found near the design's rim alone is the rim found
+    /// over every face: a wavy grid with holes (square and triangular), a missing corner and
+    /// a fin folded on a shared edge (non-manifold), refined as the verifier refines it
+    /// (remeshed, crease 180°).
+    #[test]
+    fn rim_near_the_design_rim_is_the_whole_rim() {
+        let z = |x: f64, y: f64| 0.3 * (0.7 * x).sin() * (0.5 * y).cos();
+        let p = |i: usize, j: usize| {
+            let (x, y) = (i as f64 * 1.3, j as f64 * 1.1);
+            DVec3::new(x, y, z(x, y))
+        };
+        let mut tris = Vec::new();
+        for i in 0..8 {
+            for j in 0..7 {
+                // Holes: one cell, one half cell, and the last corner cell.
+                if (i, j) == (3, 3) || (i, j) == (7, 6) {
+                    continue;
+                }
+                tris.push(Triangle::new(p(i, j), p(i + 1, j), p(i + 1, j + 1)));
+                if (i, j) != (5, 1) {
+                    tris.push(Triangle::new(p(i, j), p(i + 1, j + 1), p(i, j + 1)));
+                }
+            }
+        }
+        // A fin on the edge p(1,1)–p(2,1): a third face there.
+        tris.push(Triangle::new(
+            p(1, 1),
+            p(2, 1),
+            p(1, 1) + DVec3::new(0.6, 0.0, 1.5),
+        ));
+        let design = mesh(tris);
+        for s in [0.35, 0.8] {
+            let cfg = RefineConfig {
+                max_edge_mm: s,
+                crease_angle_deg: 180.0,
+                max_vertices: None,
+                on_cap: CapPolicy::Error,
+                region: None,
+                remesh: true,
+            };
+            let refined = refine(&design, &cfg).unwrap();
+            let whole = rim_vertices(&refined);
+            let near = rim_vertices_near(&refined, &rim_faces(&design));
+            assert!(whole.iter().filter(|&&r| r).count() > 40);
+            assert_eq!(near, whole, "at s = {s}");
+        }
     }
 
     /// The vertex normals against the definition, corner by corner: each corner's normal is
