@@ -257,37 +257,51 @@ fn crease_depths(
     design: &[cam_core::Triangle],
     unoriented: &[bool],
 ) {
-    let mut cos_min = vec![1.0f64; refined.positions.len()];
-    // A design face each vertex lies in: the source of a refined face around it.
-    let mut own = vec![u32::MAX; refined.positions.len()];
+    let nv = refined.positions.len();
     // The rim of an open mesh: vertices on an edge of one face.
     let on_rim = match rim {
         Some(rim) => refine::rim_vertices_near(refined, rim),
-        None => vec![false; refined.positions.len()],
+        None => vec![false; nv],
     };
-    // Face normals in parallel; the per-vertex minimum in order.
-    let face_n: Vec<Option<DVec3>> = refined
+    // Per vertex, the least cosine between its normal and its faces' normals, and a design
+    // face it lies in (the source of the last refined face around it): over the faces in a
+    // few pieces side by side, then merged (the least of the pieces' least, the last
+    // piece's face), the same as one pass in order whatever the number of pieces.
+    let pieces = rayon::current_num_threads().clamp(1, 8);
+    let len = refined.triangles.len().div_ceil(pieces).max(1);
+    let parts: Vec<(Vec<f64>, Vec<u32>)> = refined
         .triangles
-        .par_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| refined.positions[i as usize]);
-            (b - a).cross(c - a).try_normalize()
+        .par_chunks(len)
+        .enumerate()
+        .map(|(p, ts)| {
+            let (mut cos_min, mut own) = (vec![1.0f64; nv], vec![u32::MAX; nv]);
+            for (j, t) in ts.iter().enumerate() {
+                if let Some(&src) = refined.face_source.get(p * len + j) {
+                    for &i in t {
+                        own[i as usize] = src;
+                    }
+                }
+                let [a, b, c] = t.map(|i| refined.positions[i as usize]);
+                let Some(nf) = (b - a).cross(c - a).try_normalize() else {
+                    continue;
+                };
+                for &i in t {
+                    let i = i as usize;
+                    cos_min[i] = cos_min[i].min(refined.normals[i].dot(nf));
+                }
+            }
+            (cos_min, own)
         })
         .collect();
-    for (f, (t, nf)) in refined.triangles.iter().zip(face_n).enumerate() {
-        if let Some(&src) = refined.face_source.get(f) {
-            for &i in t {
-                own[i as usize] = src;
-            }
-        }
-        let Some(nf) = nf else {
-            continue;
-        };
-        for &i in t {
-            let i = i as usize;
-            cos_min[i] = cos_min[i].min(refined.normals[i].dot(nf));
-        }
-    }
+    let (cos_min, own): (Vec<f64>, Vec<u32>) = (0..nv)
+        .into_par_iter()
+        .map(|i| {
+            parts.iter().fold((1.0f64, u32::MAX), |(c, o), (cm, ow)| {
+                (c.min(cm[i]), if ow[i] == u32::MAX { o } else { ow[i] })
+            })
+        })
+        .unzip();
+    drop(parts);
     let crease = CREASE_DEG.to_radians().cos();
     let sharp = |i: usize| cos_min[i] < crease || on_rim[i];
     // A smooth, oriented vertex read as a gouge: asked whether a design face lies nearer
