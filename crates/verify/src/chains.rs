@@ -10,6 +10,8 @@
 
 use glam::DVec3;
 
+use crate::envelope::segment_distance as to_segment;
+
 /// The most moves in a run: a vector near a run tests every member of it. On the dome's
 /// ball program runs of 8, 16 and 32 moves are the same runs (the passes' curvature ends
 /// them first); the limit bounds straight passes.
@@ -34,18 +36,6 @@ pub(crate) struct Runs {
     /// and the slack (mm), rounded up: every member's centres' segment lies within it of
     /// the chord.
     pub chords: Vec<(DVec3, DVec3, f64)>,
-}
-
-/// The distance from `p` to the segment `a`–`b`.
-fn to_segment(p: DVec3, a: DVec3, b: DVec3) -> f64 {
-    let d = b - a;
-    let dd = d.length_squared();
-    let t = if dd > 0.0 {
-        ((p - a).dot(d) / dd).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    p.distance(a + t * d)
 }
 
 /// The farthest of the centres `ends` from the chord `a`–`b`.

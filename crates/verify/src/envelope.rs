@@ -94,7 +94,8 @@ fn pose_at(s: &Span, t: f64) -> Pose {
     }
 }
 
-fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
+/// The distance from `p` to the segment `a`–`b` (mm).
+pub(crate) fn segment_distance(p: DVec3, a: DVec3, b: DVec3) -> f64 {
     let ab = b - a;
     let l2 = ab.length_squared();
     let t = if l2 > 0.0 {

@@ -280,19 +280,10 @@ impl Listed {
         }
     }
 
+    /// Item `ci` of `volumes` (its middle and half length as [`Extras::mids`] keeps them).
     fn of(volumes: &Extras, ci: u32, rr: f64) -> Listed {
         let (_, mv, c0, c1) = volumes.items[ci as usize];
-        let (mid, half) = volumes.mids[ci as usize];
-        let d = c1 - c0;
-        Listed {
-            ci,
-            mv,
-            c0,
-            d,
-            inv_dd: inv_or_zero(d.length_squared()),
-            mid,
-            rho2: sphere_rho2(half, rr),
-        }
+        Listed::segment(ci, mv, c0, c1, rr)
     }
 
     /// Whether the segment `lo..hi` of `line` may come within `√rr2` of the centres'
