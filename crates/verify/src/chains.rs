@@ -10,7 +10,7 @@
 
 use glam::DVec3;
 
-use crate::envelope::segment_distance as to_segment;
+use crate::envelope::segment_distance;
 
 /// The most moves in a run: a vector near a run tests every member of it. On the dome's
 /// ball program runs of 8, 16 and 32 moves are the same runs (the passes' curvature ends
@@ -41,7 +41,7 @@ pub(crate) struct Runs {
 /// The farthest of the centres `ends` from the chord `a`–`b`.
 fn slack_of(ends: &[(DVec3, DVec3)], a: DVec3, b: DVec3) -> f64 {
     ends.iter()
-        .map(|&(c0, c1)| to_segment(c0, a, b).max(to_segment(c1, a, b)))
+        .map(|&(c0, c1)| segment_distance(c0, a, b).max(segment_distance(c1, a, b)))
         .fold(0.0, f64::max)
 }
 
@@ -133,7 +133,7 @@ mod tests {
                     }
                     for t in 0..=100 {
                         let x = m.2.lerp(m.3, t as f64 / 100.0);
-                        prop_assert!(to_segment(x, a, b) <= slack, "{} > {}", to_segment(x, a, b), slack);
+                        prop_assert!(segment_distance(x, a, b) <= slack, "{} > {}", segment_distance(x, a, b), slack);
                     }
                 }
                 prop_assert_eq!(a, moves[ms[0] as usize].2);

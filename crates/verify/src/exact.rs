@@ -273,13 +273,7 @@ fn misses_capsule_hull(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> bool {
         return true;
     }
     // Cylinder: |m⊥ + s·n⊥|² ≤ w².
-    let dh = d / dl;
-    let m = o - c0;
-    let mp = m - m.dot(dh) * dh;
-    let np = n - n.dot(dh) * dh;
-    let qa = np.length_squared();
-    let qb = mp.dot(np);
-    let qc = mp.length_squared() - w * w;
+    let (qa, qb, qc) = across_quadratic(o - c0, n, d / dl, w);
     if qa <= 1e-300 {
         return qc > 0.0;
     }
@@ -330,6 +324,16 @@ fn capsule_entry_with(line: &Line, c0: DVec3, c1: DVec3, r: f64, quick: bool) ->
     capsule_parts_entry(line, c0, c1, r, side.as_ref())
 }
 
+/// The quadratic `qa·s² + 2·qb·s + qc` whose sign says where the line `m + s·n` (from a
+/// point of the axis) lies within `r` of the axis along the unit `dh`: its parts across
+/// the axis, squared.
+#[inline]
+fn across_quadratic(m: DVec3, n: DVec3, dh: DVec3, r: f64) -> (f64, f64, f64) {
+    let mp = m - m.dot(dh) * dh;
+    let np = n - n.dot(dh) * dh;
+    (np.length_squared(), mp.dot(np), mp.length_squared() - r * r)
+}
+
 /// The infinite cylinder of radius `r` about the centres' line `c0`–`c1` (`None` for a
 /// point-like capsule), seen by `line`.
 struct CylinderSide {
@@ -353,13 +357,8 @@ fn cylinder_side(line: &Line, c0: DVec3, c1: DVec3, r: f64) -> Option<CylinderSi
         return None;
     }
     let dh = d / dd.sqrt();
-    // Perpendicular parts.
     let m = o - c0;
-    let mp = m - m.dot(dh) * dh;
-    let np = n - n.dot(dh) * dh;
-    let qa = np.length_squared();
-    let qb = mp.dot(np);
-    let qc = mp.length_squared() - r * r;
+    let (qa, qb, qc) = across_quadratic(m, n, dh, r);
     let across = qa > 1e-300;
     let inside = if across {
         let disc = qb * qb - qa * qc;

@@ -303,8 +303,8 @@ impl Listed {
 }
 
 /// A listed run of a ball's moves ([`crate::chains`]): its chord laid out as a [`Listed`]
-/// of radius `r + slack` (squared: `rr2`), and its members, laid out after each other in
-/// the list of every run's members (in the order of `Runs::members`) from `first`.
+/// of radius `r + slack` (squared: `rr2`), and where its members lie in the list of every
+/// run's members (laid out in the order of `Runs::members`): `count` from `first`.
 #[derive(Clone, Copy)]
 struct RunListed {
     chord: Listed,
@@ -314,15 +314,16 @@ struct RunListed {
 }
 
 impl RunListed {
-    /// Run `k` of `runs` for a ball of radius `rr`, its members laid out from `first`.
-    fn of(runs: &crate::chains::Runs, k: usize, rr: f64, first: u32) -> RunListed {
+    /// Run `k` of `runs` for a ball of radius `rr` (its members laid out as `runs.members`).
+    fn of(runs: &crate::chains::Runs, k: usize, rr: f64) -> RunListed {
         let (a, b, slack) = runs.chords[k];
+        let (first, count) = runs.ranges[k];
         let r = rr + slack;
         RunListed {
             chord: Listed::segment(k as u32, 0, a, b, r),
             rr2: r * r,
             first,
-            count: runs.ranges[k].1,
+            count,
         }
     }
 
@@ -469,7 +470,7 @@ impl BallRuns {
             .unzip();
         let tree = Extras::from_items(items, bounds, 0.0);
         let lay = (0..runs.ranges.len())
-            .map(|k| RunListed::of(&runs, k, rr, runs.ranges[k].0))
+            .map(|k| RunListed::of(&runs, k, rr))
             .collect();
         let members = runs
             .members
@@ -2540,8 +2541,9 @@ mod tests {
     proptest! {
         /// A run a segment is turned away from holds no move whose capsule the segment
         /// enters. Passes along arcs (radius 4 to 30 mm, moves 0.3 to 1 mm, runs bulging
-        /// off their chords by up to the slack), segments ending within 0.1 mm of the
-        /// swept surface at a random member's point, in random directions.
+        /// off their chords by up to the slack), segments ending within 0.1 mm of a random
+        /// member's capsule (across it, every other one inside), coming in towards it at
+        /// random angles.
         #[test]
         fn a_run_turned_away_holds_no_move_entered(
             radius in 4.0..30.0f64,
@@ -2565,9 +2567,9 @@ mod tests {
             let mut turned = 0usize;
             for (i, &(which, along, dir, n, off, len)) in picks.iter().enumerate() {
                 // Every other point outside the member's capsule, the others inside.
-                let off = if i % 2 == 0 { off.abs() } else { -off.abs() };
+                let off = if i % 2 == 0 { off } else { -off };
                 let k = ((which * runs.ranges.len() as f64) as usize).min(runs.ranges.len() - 1);
-                let run = RunListed::of(&runs, k, rr, 0);
+                let run = RunListed::of(&runs, k, rr);
                 let (first, count) = runs.ranges[k];
                 let members = &runs.members[first as usize..(first + count) as usize];
                 let (dir, n) = (DVec3::new(dir.0, dir.1, dir.2), DVec3::new(n.0, n.1, n.2));
