@@ -580,12 +580,7 @@ pub fn verify_with_progress(
             let ((topo, bvh), rapids) = rayon::join(
                 || {
                     rayon::join(
-                        || {
-                            let (topo, unoriented) = refine::topology_and_unoriented(part);
-                            // An open part's triangles on and next to its rim.
-                            let rim = (topo.boundary_edges > 0).then(|| refine::rim_faces(part));
-                            (topo, unoriented, rim)
-                        },
+                        || refine::design_topology(part),
                         || TriangleBvh::new(part.triangles()),
                     )
                 },

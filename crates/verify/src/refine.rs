@@ -314,12 +314,10 @@ pub fn rim_vertices(refined: &RefinedMesh) -> Vec<bool> {
     rim
 }
 
-/// Per design triangle (in `Mesh::triangles` order): 2 where one of its edges is a boundary
-/// edge (used by it alone), 1 where it shares an edge with such a triangle, else 0; for
-/// [`rim_vertices_near`].
-pub fn rim_faces(mesh: &Mesh) -> Vec<u8> {
-    let (_, tris) = weld(mesh);
-    let uses = edge_uses(&tris);
+/// Per welded design triangle: 2 where one of its edges is a boundary edge (used by it
+/// alone, `uses` as [`edge_uses`] counts them), 1 where it shares an edge with such a
+/// triangle, else 0; for [`rim_vertices_near`].
+fn rim_levels(tris: &[[u32; 3]], uses: &IntMap<u64, (u32, u32)>) -> Vec<u8> {
     let n = |a: u32, b: u32| uses.get(&edge_key(a, b)).map_or(0, |u| u.0);
     let edges = |t: &[u32; 3]| {
         let t = *t;
@@ -343,7 +341,8 @@ pub fn rim_faces(mesh: &Mesh) -> Vec<u8> {
     level
 }
 
-/// [`rim_vertices`] of a refinement of the design whose [`rim_faces`] are `rim`, counting
+/// [`rim_vertices`] of a refinement of the design whose rim levels ([`design_topology`])
+/// are `rim`, counting
 /// only the refined faces of design triangles on or next to its rim: a refined edge used by
 /// one face lies on a boundary edge of the design (the refinement is conforming), and every
 /// refined edge of a triangle on the rim is counted with all its faces (they lie in that
@@ -382,12 +381,14 @@ pub fn rim_vertices_near(refined: &RefinedMesh, rim: &[u8]) -> Vec<bool> {
 
 /// Counts the boundary, non-manifold and misoriented edges of `mesh` (see [`Topology`]).
 pub fn topology(mesh: &Mesh) -> Topology {
-    topology_and_unoriented(mesh).0
+    design_topology(mesh).0
 }
 
-/// [`topology`], and per design triangle (in `Mesh::triangles` order) whether one of its
-/// edges is non-manifold or misoriented: there the material side is unknown.
-pub fn topology_and_unoriented(mesh: &Mesh) -> (Topology, Vec<bool>) {
+/// [`topology`]; per design triangle (in `Mesh::triangles` order) whether one of its edges
+/// is non-manifold or misoriented (there the material side is unknown); and, for a mesh
+/// with boundary edges, each triangle's level next to its rim (2 on it, 1 sharing an edge
+/// with a triangle on it, else 0; for [`rim_vertices_near`]).
+pub fn design_topology(mesh: &Mesh) -> (Topology, Vec<bool>, Option<Vec<u8>>) {
     let (_, tris) = weld(mesh);
     let uses = edge_uses(&tris);
     let mut topo = Topology::default();
@@ -407,7 +408,8 @@ pub fn topology_and_unoriented(mesh: &Mesh) -> (Topology, Vec<bool>) {
         .iter()
         .map(|t| (0..3).any(|k| t[k] != t[(k + 1) % 3] && bad(t[k], t[(k + 1) % 3])))
         .collect();
-    (topo, unoriented)
+    let rim = (topo.boundary_edges > 0).then(|| rim_levels(&tris, &uses));
+    (topo, unoriented, rim)
 }
 
 fn estimate_vertices(area_mm2: f64, s: f64) -> usize {
@@ -974,7 +976,8 @@ mod tests {
             };
             let refined = refine(&design, &cfg).unwrap();
             let whole = rim_vertices(&refined);
-            let near = rim_vertices_near(&refined, &rim_faces(&design));
+            let rim = design_topology(&design).2.expect("an open design");
+            let near = rim_vertices_near(&refined, &rim);
             assert!(whole.iter().filter(|&&r| r).count() > 40);
             assert_eq!(near, whole, "at s = {s}");
         }
