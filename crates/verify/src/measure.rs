@@ -1419,7 +1419,7 @@ pub fn measure_with_inner(
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
     measure_inner(
-        refined, inner_mm, models, toolpath, cfg, surface, locator, None,
+        refined, inner_mm, models, toolpath, cfg, surface, locator, None, None,
     )
 }
 
@@ -1446,7 +1446,67 @@ pub fn measure_progress(
         surface,
         Locator::Fast,
         Some(progress),
+        None,
     )
+}
+
+/// Picks vertices to measure again from a first measurement: `(vertex, inner length mm)`
+/// for each (see [`measure_then`]).
+pub type Redo<'a> = &'a mut dyn FnMut(&Measurement) -> Vec<(usize, f64)>;
+
+/// [`measure_progress`], then once more for the vertices `redo` picks from that first
+/// reading, each from its own inner length (mm, in place of `cfg.inside_mm`): their
+/// readings replace the first ones; the counts stay the first pass's. The same result as
+/// [`measure_progress`] followed by [`measure_with_inner`] on the picked vertices, with the
+/// moves' trees and lists laid out once for both passes (on mount_rush some 40 thousand
+/// vectors that start outside an open relief's material are measured again).
+///
+/// # Errors
+/// As [`measure`], and [`DeviationError::BadLength`] for a picked length that is negative
+/// or not finite, or a picked vertex out of range.
+pub fn measure_then(
+    refined: &RefinedMesh,
+    models: &[&SweepModel],
+    toolpath: &Toolpath,
+    cfg: &DeviationConfig,
+    surface: SurfaceModel,
+    progress: Progress<'_>,
+    redo: Redo<'_>,
+) -> Result<Measurement, DeviationError> {
+    let inner = vec![cfg.inside_mm; refined.positions.len()];
+    let n = refined.positions.len();
+    let mut bad: Option<f64> = None;
+    let mut checked = |m: &Measurement| {
+        let picks = redo(m);
+        match picks
+            .iter()
+            .find(|&&(i, l)| i >= n || !(l.is_finite() && l >= 0.0))
+        {
+            Some(&(_, l)) => {
+                bad = Some(l);
+                Vec::new()
+            }
+            None => picks,
+        }
+    };
+    let m = measure_inner(
+        refined,
+        &inner,
+        models,
+        toolpath,
+        cfg,
+        surface,
+        Locator::Fast,
+        Some(progress),
+        Some(&mut checked),
+    )?;
+    match bad {
+        Some(l) => Err(DeviationError::BadLength {
+            inside_mm: l,
+            outside_mm: cfg.outside_mm,
+        }),
+        None => Ok(m),
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -1459,6 +1519,7 @@ fn measure_inner(
     surface: SurfaceModel,
     locator: Locator,
     progress: Option<Progress<'_>>,
+    redo: Option<Redo<'_>>,
 ) -> Result<Measurement, DeviationError> {
     let ok = |x: f64| x.is_finite() && x >= 0.0;
     let bad = inner_mm.iter().find(|&&x| !ok(x));
@@ -1485,7 +1546,7 @@ fn measure_inner(
         })
         .collect();
     Ok(measure_vectors(
-        &vectors, models, toolpath, cfg.facing, surface, locator, progress,
+        &vectors, models, toolpath, cfg.facing, surface, locator, progress, redo,
     ))
 }
 
@@ -1516,6 +1577,7 @@ pub fn first_entries(
         surface,
         Locator::Fast,
         None,
+        None,
     )
     .deviations
     .iter()
@@ -1523,7 +1585,9 @@ pub fn first_entries(
     .collect()
 }
 
-/// The measurement for explicit vectors.
+/// The measurement for explicit vectors; then, if `redo` picks any from it (`(index,
+/// inner length)`), those again from `−length` (see [`measure_then`]).
+#[allow(clippy::too_many_arguments)]
 fn measure_vectors(
     vectors: &[Vector],
     models: &[&SweepModel],
@@ -1532,6 +1596,7 @@ fn measure_vectors(
     surface: SurfaceModel,
     locator: Locator,
     progress: Option<Progress<'_>>,
+    redo: Option<Redo<'_>>,
 ) -> Measurement {
     let exact = surface == SurfaceModel::Exact;
     let delta = window(models);
@@ -2263,239 +2328,267 @@ fn measure_vectors(
     // compact (the vector's position and normal are put back at the end) and the counts
     // summed per tile: these records are copied and placed, and at several hundred
     // thousand vectors their size is felt.
-    let mut readings: Vec<Reading> = Vec::with_capacity(vectors.len());
-    let mut stats = [0usize; 5];
     let add = |sum: &mut [usize; 5], s: &[usize; 5]| {
         for (a, b) in sum.iter_mut().zip(s) {
             *a += b;
         }
     };
-    for chunk in vectors.chunks(MEASURE_CHUNK) {
-        if direct {
-            // In tiles of neighbouring vectors (Morton order of their origins), each seeded
-            // by the move that cut one before it; the seeds only prune (the answers do not
-            // depend on them, but for the last bits of a bull's Newton solve).
-            let codes = crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
-            let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
-            order.par_sort_unstable();
-            let done: Vec<TileReadings> = order
-                .par_chunks(DIRECT_TILE)
-                // One tile per piece: tiles differ in cost with the part's shape (a flat
-                // floor, a steep wall), and rayon's default split can leave a whole half
-                // of them on one thread (the dome's measure scaled 1.5x to 2 threads).
-                .with_max_len(1)
-                .map(|tile| {
-                    let (mut vols, mut cols, mut pending) = (Vec::new(), Vec::new(), Vec::new());
-                    let mut rlay: Vec<RunListed> = Vec::new();
-                    let mut play: Vec<PuckListed> = Vec::new();
-                    let mut clay: Vec<ColumnListed> = Vec::new();
-                    // The moves and columns near the tile's vectors, from their starts to
-                    // `TILE_REACH_MM` out, gathered once: a group whose box lies within
-                    // filters these instead of walking the trees (the same lists).
-                    let (mut tlo, mut thi) =
-                        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-                    for &(_, i) in tile {
-                        let v = &chunk[i as usize];
-                        let (p, q) = (v.o + v.lo * v.n, v.o + v.hi.min(TILE_REACH_MM) * v.n);
-                        (tlo, thi) = (tlo.min(p).min(q), thi.max(p).max(q));
-                    }
-                    let tpad = 1e-9 * (1.0 + tlo.abs().max(thi.abs()).max_element());
-                    (tlo, thi) = (tlo - tpad, thi + tpad);
-                    let (mut tile_vols, mut tile_cols) = (Vec::new(), Vec::new());
-                    let tile_listed = (
-                        move_tree.gather(tlo, thi, move_round, TILE_MOVES, &mut tile_vols),
-                        columns.gather(tlo, thi, 0.0, TILE_COLUMNS, &mut tile_cols),
-                    );
-                    let mut out = Vec::with_capacity(tile.len());
-                    let mut sum = [0usize; 5];
-                    // The moves that answered last, distinct, oldest first: the seeds.
-                    let mut recent: Vec<u32> = Vec::with_capacity(RECENT_SEEDS);
-                    let mut keep = |i: u32, r: PerVector, recent: &mut Vec<u32>| {
-                        if let Some(mv) = r.0.source_move {
-                            if let Some(k) = recent.iter().position(|&m| m == mv) {
-                                recent.remove(k);
-                            } else if recent.len() == RECENT_SEEDS {
-                                recent.remove(0);
-                            }
-                            recent.push(mv);
-                        }
-                        add(&mut sum, &r.4);
-                        out.push((i, Reading::of(&r)));
-                    };
-                    for group in tile.chunks(DIRECT_GROUP) {
-                        // A vector's entry into the latest of the recent moves it enters
-                        // bounds its search; a vector they all miss is searched in the trees,
-                        // and seeds the next.
-                        pending.clear();
-                        for &(_, i) in group {
+    let pass = |vectors: &[Vector], progress: Option<Progress<'_>>| -> Measurement {
+        let mut readings: Vec<Reading> = Vec::with_capacity(vectors.len());
+        let mut stats = [0usize; 5];
+        for chunk in vectors.chunks(MEASURE_CHUNK) {
+            if direct {
+                // In tiles of neighbouring vectors (Morton order of their origins), each seeded
+                // by the move that cut one before it; the seeds only prune (the answers do not
+                // depend on them, but for the last bits of a bull's Newton solve).
+                let codes =
+                    crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
+                let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
+                order.par_sort_unstable();
+                let done: Vec<TileReadings> = order
+                    .par_chunks(DIRECT_TILE)
+                    // One tile per piece: tiles differ in cost with the part's shape (a flat
+                    // floor, a steep wall), and rayon's default split can leave a whole half
+                    // of them on one thread (the dome's measure scaled 1.5x to 2 threads).
+                    .with_max_len(1)
+                    .map(|tile| {
+                        let (mut vols, mut cols, mut pending) =
+                            (Vec::new(), Vec::new(), Vec::new());
+                        let mut rlay: Vec<RunListed> = Vec::new();
+                        let mut play: Vec<PuckListed> = Vec::new();
+                        let mut clay: Vec<ColumnListed> = Vec::new();
+                        // The moves and columns near the tile's vectors, from their starts to
+                        // `TILE_REACH_MM` out, gathered once: a group whose box lies within
+                        // filters these instead of walking the trees (the same lists).
+                        let (mut tlo, mut thi) =
+                            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                        for &(_, i) in tile {
                             let v = &chunk[i as usize];
-                            let bound = recent
-                                .iter()
-                                .rev()
-                                .find_map(|&m| seed_entry(v, seed_of(m)?));
-                            match bound {
-                                Some(b) => pending.push((i, b)),
-                                None => {
-                                    let r = direct_one(
-                                        v,
-                                        (!recent.is_empty(), None),
-                                        None,
-                                        None,
-                                        None,
-                                        None,
-                                    );
-                                    keep(i, r, &mut recent);
+                            let (p, q) = (v.o + v.lo * v.n, v.o + v.hi.min(TILE_REACH_MM) * v.n);
+                            (tlo, thi) = (tlo.min(p).min(q), thi.max(p).max(q));
+                        }
+                        let tpad = 1e-9 * (1.0 + tlo.abs().max(thi.abs()).max_element());
+                        (tlo, thi) = (tlo - tpad, thi + tpad);
+                        let (mut tile_vols, mut tile_cols) = (Vec::new(), Vec::new());
+                        let tile_listed = (
+                            move_tree.gather(tlo, thi, move_round, TILE_MOVES, &mut tile_vols),
+                            columns.gather(tlo, thi, 0.0, TILE_COLUMNS, &mut tile_cols),
+                        );
+                        let mut out = Vec::with_capacity(tile.len());
+                        let mut sum = [0usize; 5];
+                        // The moves that answered last, distinct, oldest first: the seeds.
+                        let mut recent: Vec<u32> = Vec::with_capacity(RECENT_SEEDS);
+                        let mut keep = |i: u32, r: PerVector, recent: &mut Vec<u32>| {
+                            if let Some(mv) = r.0.source_move {
+                                if let Some(k) = recent.iter().position(|&m| m == mv) {
+                                    recent.remove(k);
+                                } else if recent.len() == RECENT_SEEDS {
+                                    recent.remove(0);
+                                }
+                                recent.push(mv);
+                            }
+                            add(&mut sum, &r.4);
+                            out.push((i, Reading::of(&r)));
+                        };
+                        for group in tile.chunks(DIRECT_GROUP) {
+                            // A vector's entry into the latest of the recent moves it enters
+                            // bounds its search; a vector they all miss is searched in the trees,
+                            // and seeds the next.
+                            pending.clear();
+                            for &(_, i) in group {
+                                let v = &chunk[i as usize];
+                                let bound = recent
+                                    .iter()
+                                    .rev()
+                                    .find_map(|&m| seed_entry(v, seed_of(m)?));
+                                match bound {
+                                    Some(b) => pending.push((i, b)),
+                                    None => {
+                                        let r = direct_one(
+                                            v,
+                                            (!recent.is_empty(), None),
+                                            None,
+                                            None,
+                                            None,
+                                            None,
+                                        );
+                                        keep(i, r, &mut recent);
+                                    }
                                 }
                             }
-                        }
-                        if pending.is_empty() {
-                            continue;
-                        }
-                        // The rest search only the moves and columns that can reach the box
-                        // of their segments up to those bounds (padded for rounding),
-                        // gathered once for the group. Where that box holds too many (a
-                        // dense program), each vector searches the trees, which prune by its
-                        // own segment.
-                        let (mut lo, mut hi) =
-                            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-                        for &(i, (e, _)) in &pending {
-                            let v = &chunk[i as usize];
-                            let (p, q) = (v.o + v.lo * v.n, v.o + e.s * v.n);
-                            (lo, hi) = (lo.min(p).min(q), hi.max(p).max(q));
-                        }
-                        let pad = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
-                        (lo, hi) = (lo - pad, hi + pad);
-                        vols.clear();
-                        cols.clear();
-                        let within = lo.cmpge(tlo).all() && hi.cmple(thi).all();
-                        let listed = (
-                            if within && tile_listed.0 {
-                                move_tree.gather_from(
-                                    &tile_vols, lo, hi, move_round, move_limit, &mut vols,
-                                )
-                            } else {
-                                move_tree.gather(lo, hi, move_round, move_limit, &mut vols)
-                            },
-                            if within && tile_listed.1 {
-                                columns.gather_from(
-                                    &tile_cols,
-                                    lo,
-                                    hi,
-                                    0.0,
-                                    DIRECT_COLUMNS,
-                                    &mut cols,
-                                )
-                            } else {
-                                columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols)
-                            },
-                        );
-                        // A ball's listed runs (their members laid out once for all groups).
-                        let moves = (runs.is_some() && listed.0).then(|| {
-                            rlay.clear();
-                            rlay.extend(
-                                vols.iter()
-                                    .map(|&ci| run_lay[run_tree.items[ci as usize].1 as usize]),
+                            if pending.is_empty() {
+                                continue;
+                            }
+                            // The rest search only the moves and columns that can reach the box
+                            // of their segments up to those bounds (padded for rounding),
+                            // gathered once for the group. Where that box holds too many (a
+                            // dense program), each vector searches the trees, which prune by its
+                            // own segment.
+                            let (mut lo, mut hi) =
+                                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+                            for &(i, (e, _)) in &pending {
+                                let v = &chunk[i as usize];
+                                let (p, q) = (v.o + v.lo * v.n, v.o + e.s * v.n);
+                                (lo, hi) = (lo.min(p).min(q), hi.max(p).max(q));
+                            }
+                            let pad = 1e-9 * (1.0 + lo.abs().max(hi.abs()).max_element());
+                            (lo, hi) = (lo - pad, hi + pad);
+                            vols.clear();
+                            cols.clear();
+                            let within = lo.cmpge(tlo).all() && hi.cmple(thi).all();
+                            let listed = (
+                                if within && tile_listed.0 {
+                                    move_tree.gather_from(
+                                        &tile_vols, lo, hi, move_round, move_limit, &mut vols,
+                                    )
+                                } else {
+                                    move_tree.gather(lo, hi, move_round, move_limit, &mut vols)
+                                },
+                                if within && tile_listed.1 {
+                                    columns.gather_from(
+                                        &tile_cols,
+                                        lo,
+                                        hi,
+                                        0.0,
+                                        DIRECT_COLUMNS,
+                                        &mut cols,
+                                    )
+                                } else {
+                                    columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols)
+                                },
                             );
-                            (&rlay[..], &member_lay[..])
-                        });
-                        // The listed columns, likewise. Every move of a program searched
-                        // here keeps its axis; were one not to, the group's vectors would
-                        // walk the column tree instead.
-                        let column_moves = listed
-                            .1
-                            .then(|| {
-                                clay.clear();
-                                clay.extend(cols.iter().map_while(|&ci| column_lay[ci as usize]));
-                                &clay[..]
-                            })
-                            .filter(|c| c.len() == cols.len());
-                        // A bull's, likewise.
-                        let bull_moves = (bull && listed.0).then(|| {
-                            play.clear();
-                            play.extend(vols.iter().map(|&ci| puck_lay[ci as usize]));
-                            &play[..]
-                        });
-                        for &(i, b) in &pending {
-                            // A ball's list holds runs, not moves.
-                            let among = (listed.0 && runs.is_none()).then_some(&vols[..]);
-                            let r = direct_one(
-                                &chunk[i as usize],
-                                (true, Some(b)),
-                                among,
-                                moves,
-                                bull_moves,
-                                column_moves,
-                            );
-                            keep(i, r, &mut recent);
+                            // A ball's listed runs (their members laid out once for all groups).
+                            let moves = (runs.is_some() && listed.0).then(|| {
+                                rlay.clear();
+                                rlay.extend(
+                                    vols.iter()
+                                        .map(|&ci| run_lay[run_tree.items[ci as usize].1 as usize]),
+                                );
+                                (&rlay[..], &member_lay[..])
+                            });
+                            // The listed columns, likewise. Every move of a program searched
+                            // here keeps its axis; were one not to, the group's vectors would
+                            // walk the column tree instead.
+                            let column_moves = listed
+                                .1
+                                .then(|| {
+                                    clay.clear();
+                                    clay.extend(
+                                        cols.iter().map_while(|&ci| column_lay[ci as usize]),
+                                    );
+                                    &clay[..]
+                                })
+                                .filter(|c| c.len() == cols.len());
+                            // A bull's, likewise.
+                            let bull_moves = (bull && listed.0).then(|| {
+                                play.clear();
+                                play.extend(vols.iter().map(|&ci| puck_lay[ci as usize]));
+                                &play[..]
+                            });
+                            for &(i, b) in &pending {
+                                // A ball's list holds runs, not moves.
+                                let among = (listed.0 && runs.is_none()).then_some(&vols[..]);
+                                let r = direct_one(
+                                    &chunk[i as usize],
+                                    (true, Some(b)),
+                                    among,
+                                    moves,
+                                    bull_moves,
+                                    column_moves,
+                                );
+                                keep(i, r, &mut recent);
+                            }
                         }
+                        (out, sum)
+                    })
+                    .collect();
+                // Back in the vectors' order: where each index's reading lies (its tile, its
+                // place there), then the readings gathered in parallel.
+                let mut at = vec![(u32::MAX, 0u32); chunk.len()];
+                for (t, (out, sum)) in done.iter().enumerate() {
+                    add(&mut stats, sum);
+                    for (k, &(i, _)) in out.iter().enumerate() {
+                        at[i as usize] = (t as u32, k as u32);
                     }
-                    (out, sum)
-                })
-                .collect();
-            // Back in the vectors' order: where each index's reading lies (its tile, its
-            // place there), then the readings gathered in parallel.
-            let mut at = vec![(u32::MAX, 0u32); chunk.len()];
-            for (t, (out, sum)) in done.iter().enumerate() {
-                add(&mut stats, sum);
-                for (k, &(i, _)) in out.iter().enumerate() {
-                    at[i as usize] = (t as u32, k as u32);
+                }
+                readings.par_extend(at.par_iter().map(|&(t, k)| {
+                    assert!(t != u32::MAX, "every vector of the chunk measured once");
+                    done[t as usize].0[k as usize].1
+                }));
+            } else {
+                let found = find(chunk);
+                let per: Vec<(Reading, [usize; 5])> = chunk
+                    .par_iter()
+                    .zip(found.par_iter())
+                    .map(|x| {
+                        let r = one(x);
+                        (Reading::of(&r), r.4)
+                    })
+                    .collect();
+                for (r, s) in per {
+                    add(&mut stats, &s);
+                    readings.push(r);
                 }
             }
-            readings.par_extend(at.par_iter().map(|&(t, k)| {
-                assert!(t != u32::MAX, "every vector of the chunk measured once");
-                done[t as usize].0[k as usize].1
-            }));
-        } else {
-            let found = find(chunk);
-            let per: Vec<(Reading, [usize; 5])> = chunk
-                .par_iter()
-                .zip(found.par_iter())
-                .map(|x| {
-                    let r = one(x);
-                    (Reading::of(&r), r.4)
-                })
-                .collect();
-            for (r, s) in per {
-                add(&mut stats, &s);
-                readings.push(r);
+            if let Some(p) = progress {
+                p(readings.len(), vectors.len());
             }
         }
-        if let Some(p) = progress {
-            p(readings.len(), vectors.len());
+        let deviations = readings
+            .par_iter()
+            .zip(vectors)
+            .map(|(r, v)| Deviation {
+                position: v.o,
+                normal: v.n,
+                signed_mm: r.signed_mm,
+                source_move: r.source_move,
+            })
+            .collect();
+        let facing = readings.par_iter().map(|r| r.facing).collect();
+        let linear_mm = readings.par_iter().map(|r| r.linear_mm).collect();
+        let source = readings.par_iter().map(|r| r.source).collect();
+        let from_start = readings
+            .par_iter()
+            .zip(vectors)
+            .map(|(r, v)| r.signed_mm == Some(v.lo))
+            .collect();
+        Measurement {
+            deviations,
+            facing,
+            linear_mm,
+            source,
+            from_start,
+            stats: MeasureStats {
+                crossed: stats[0],
+                refinements: stats[1],
+                refined: stats[2],
+                kept_linear: stats[3],
+                overflow: stats[4],
+            },
+        }
+    };
+    let mut m = pass(vectors, progress);
+    // The vectors picked again, each from its new inner end: their readings replace the
+    // first ones (the counts stay the first pass's).
+    let picks = redo.map_or_else(Vec::new, |f| f(&m));
+    if !picks.is_empty() {
+        let again: Vec<Vector> = picks
+            .iter()
+            .map(|&(i, l)| Vector {
+                lo: -l,
+                ..vectors[i]
+            })
+            .collect();
+        let a = pass(&again, None);
+        for (k, &(i, _)) in picks.iter().enumerate() {
+            m.deviations[i] = a.deviations[k];
+            m.facing[i] = a.facing[k];
+            m.linear_mm[i] = a.linear_mm[k];
+            m.source[i] = a.source[k];
+            m.from_start[i] = a.from_start[k];
         }
     }
-    let deviations = readings
-        .par_iter()
-        .zip(vectors)
-        .map(|(r, v)| Deviation {
-            position: v.o,
-            normal: v.n,
-            signed_mm: r.signed_mm,
-            source_move: r.source_move,
-        })
-        .collect();
-    let facing = readings.par_iter().map(|r| r.facing).collect();
-    let linear_mm = readings.par_iter().map(|r| r.linear_mm).collect();
-    let source = readings.par_iter().map(|r| r.source).collect();
-    let from_start = readings
-        .par_iter()
-        .zip(vectors)
-        .map(|(r, v)| r.signed_mm == Some(v.lo))
-        .collect();
-    Measurement {
-        deviations,
-        facing,
-        linear_mm,
-        source,
-        from_start,
-        stats: MeasureStats {
-            crossed: stats[0],
-            refinements: stats[1],
-            refined: stats[2],
-            kept_linear: stats[3],
-            overflow: stats[4],
-        },
-    }
+    m
 }
 
 /// A tile's readings (by vector index in its chunk) and its summed counts.

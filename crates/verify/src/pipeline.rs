@@ -144,19 +144,20 @@ impl Verification {
     }
 }
 
-/// Re-measures the gouges whose vectors reached beyond the material (thin walls, skins open
-/// to the sky, [`material`]) with their inner length clipped to it. Only gouges deeper than
-/// the tolerance are checked: a vector's reading changes only when its entry lies deeper
-/// than its clipped length, and shallower readings are within tolerance either way.
+/// The gouges whose vectors reached beyond the material (thin walls, skins open to the
+/// sky, [`material`]), to be measured again with their inner length clipped to it
+/// ([`measure::measure_then`]): `(vertex, clipped length)`, with the clipped lengths of
+/// every gouge. Only gouges deeper than the tolerance are checked: a vector's reading
+/// changes only when its entry lies deeper than its clipped length, and shallower readings
+/// are within tolerance either way.
 fn clip_to_material(
     part_bvh: &TriangleBvh,
     refined: &RefinedMesh,
-    models: &[&SweepModel],
     toolpath: &Toolpath,
     cfg: &VerifyConfig,
     topology: &refine::Topology,
-    m: &mut measure::Measurement,
-) -> Result<material::InnerLengths, VerifyError> {
+    m: &measure::Measurement,
+) -> (material::InnerLengths, Vec<(usize, f64)>) {
     let gouges: Vec<usize> = (0..refined.len())
         .filter(|&i| {
             m.deviations[i]
@@ -165,7 +166,7 @@ fn clip_to_material(
         })
         .collect();
     if gouges.is_empty() {
-        return Ok(material::InnerLengths::default());
+        return (material::InnerLengths::default(), Vec::new());
     }
     let inner = material::inner_lengths_at(
         part_bvh,
@@ -175,40 +176,13 @@ fn clip_to_material(
         material::is_three_axis(toolpath),
         topology.is_closed_and_oriented(),
     );
-    let redo: Vec<(usize, f64)> = gouges
+    let redo = gouges
         .iter()
         .zip(&inner.inner_mm)
         .filter(|&(&i, &l)| m.deviations[i].signed_mm.is_some_and(|s| s < -l))
         .map(|(&i, &l)| (i, l))
         .collect();
-    if redo.is_empty() {
-        return Ok(inner);
-    }
-    let sub = RefinedMesh {
-        positions: redo.iter().map(|&(i, _)| refined.positions[i]).collect(),
-        normals: redo.iter().map(|&(i, _)| refined.normals[i]).collect(),
-        triangles: Vec::new(),
-        face_source: Vec::new(),
-        max_edge_mm: refined.max_edge_mm,
-    };
-    let lens: Vec<f64> = redo.iter().map(|&(_, l)| l).collect();
-    let again = measure::measure_with_inner(
-        &sub,
-        &lens,
-        models,
-        toolpath,
-        &cfg.deviation,
-        cfg.surface,
-        measure::Locator::Fast,
-    )?;
-    for (k, &(i, _)) in redo.iter().enumerate() {
-        m.deviations[i] = again.deviations[k];
-        m.facing[i] = again.facing[k];
-        m.linear_mm[i] = again.linear_mm[k];
-        m.source[i] = again.source[k];
-        m.from_start[i] = again.from_start[k];
-    }
-    Ok(inner)
+    (inner, redo)
 }
 
 /// Vertices whose averaged normal is further than this from an adjacent face's normal sit
@@ -611,16 +585,20 @@ pub fn verify_with_progress(
     models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
     // Inner vector lengths clipped to the material (thin walls, skins open to the sky).
     let measure_progress = |done: usize, total: usize| report_stage(Stage::Measure, done, total);
-    let mut m = measure::measure_progress(
+    let mut inner = material::InnerLengths::default();
+    let mut clip = |m: &measure::Measurement| {
+        let (lengths, redo) = clip_to_material(&part_bvh, &refined, toolpath, cfg, &topology, m);
+        inner = lengths;
+        redo
+    };
+    let mut m = measure::measure_then(
         &refined,
         &models,
         toolpath,
         &cfg.deviation,
         cfg.surface,
         &measure_progress,
-    )?;
-    let inner = clip_to_material(
-        &part_bvh, &refined, &models, toolpath, cfg, &topology, &mut m,
+        &mut clip,
     )?;
     let mut devs = std::mem::take(&mut m.deviations);
     let exact = (cfg.surface == SurfaceModel::Exact).then_some((models.as_slice(), toolpath));

@@ -4,7 +4,10 @@
 
 use cam_core::{Cutter, DVec3, Mesh, Move, MoveKind, Pose, Toolpath, Units};
 use cam_verify::deviation::DeviationConfig;
-use cam_verify::measure::{Locator, Measurement, SurfaceModel, measure_with};
+use cam_verify::measure::{
+    Locator, Measurement, SurfaceModel, measure_progress, measure_then, measure_with,
+    measure_with_inner,
+};
 use cam_verify::model::SweepModel;
 use cam_verify::refine::{self, RefineConfig, RefinedMesh};
 use cam_verify::sweep::SweepConfig;
@@ -241,6 +244,92 @@ fn measurement_does_not_depend_on_threads() {
             })
     };
     assert_same(&run(1), &run(2), "1 vs 2 threads");
+}
+
+/// Measuring again in the same pass (`measure_then`) reads what a second measurement of the
+/// picked vertices alone reads, their inner lengths changed, and leaves the rest and the
+/// counts as the first pass has them: for a ball (the runs), a bull (Newton's method, whose
+/// last bits follow its seeds) and a flat end mill, the picks spread over the part.
+#[test]
+fn measuring_again_in_one_pass_equals_a_second_measurement() {
+    for cutter in [
+        Cutter::ball(6.0).unwrap(),
+        Cutter::bull(6.0, 1.5).unwrap(),
+        Cutter::flat(6.0).unwrap(),
+    ] {
+        let tp = dome_zigzag(3.0, (-10.0, 10.0), (-4.0, 4.0), 1.0);
+        let r = refined_dome(0.05, &cutter);
+        let fwd = SweepModel::new(&tp, &cutter, &SweepConfig::default());
+        let cfg = DeviationConfig::default();
+        // Every 7th vertex, from lengths between 0 and 2 mm.
+        let picks: Vec<(usize, f64)> = (0..r.len())
+            .step_by(7)
+            .map(|i| (i, (i % 5) as f64 * 0.5))
+            .collect();
+        let mut seen = 0;
+        let mut pick = |m: &Measurement| {
+            seen = m.deviations.len();
+            picks.clone()
+        };
+        let none = |_: usize, _: usize| {};
+        let both = measure_then(
+            &r,
+            &[&fwd],
+            &tp,
+            &cfg,
+            SurfaceModel::Exact,
+            &none,
+            &mut pick,
+        )
+        .unwrap();
+        assert_eq!(seen, r.len(), "the first pass is handed over whole");
+        let first = measure_progress(&r, &[&fwd], &tp, &cfg, SurfaceModel::Exact, &none).unwrap();
+        let sub = RefinedMesh {
+            positions: picks.iter().map(|&(i, _)| r.positions[i]).collect(),
+            normals: picks.iter().map(|&(i, _)| r.normals[i]).collect(),
+            triangles: Vec::new(),
+            face_source: Vec::new(),
+            max_edge_mm: r.max_edge_mm,
+        };
+        let lens: Vec<f64> = picks.iter().map(|&(_, l)| l).collect();
+        let again = measure_with_inner(
+            &sub,
+            &lens,
+            &[&fwd],
+            &tp,
+            &cfg,
+            SurfaceModel::Exact,
+            Locator::Fast,
+        )
+        .unwrap();
+        let mut expect = first.clone();
+        for (k, &(i, _)) in picks.iter().enumerate() {
+            expect.deviations[i] = again.deviations[k];
+            expect.facing[i] = again.facing[k];
+            expect.linear_mm[i] = again.linear_mm[k];
+            expect.source[i] = again.source[k];
+            expect.from_start[i] = again.from_start[k];
+        }
+        let changed = picks
+            .iter()
+            .filter(|&&(i, _)| {
+                first.deviations[i]
+                    != again.deviations[picks.iter().position(|p| p.0 == i).unwrap()]
+            })
+            .count();
+        assert!(
+            changed > 0,
+            "{cutter:?}: some picked vertex reads otherwise"
+        );
+        assert_same(&both, &expect, &format!("{cutter:?}"));
+        assert_eq!(both.from_start, expect.from_start);
+        assert_eq!(both.linear_mm, expect.linear_mm);
+        // A bad length is refused.
+        let mut bad = |_: &Measurement| vec![(0, f64::NAN)];
+        assert!(
+            measure_then(&r, &[&fwd], &tp, &cfg, SurfaceModel::Exact, &none, &mut bad).is_err()
+        );
+    }
 }
 
 /// On the exact surface, vertical vectors from the dome's top surface at z-map nodes read
