@@ -1646,7 +1646,14 @@ fn measure_vectors(
         || {
             rayon::join(
                 || Extras::columns(models, toolpath, reach),
-                || Extras::pucks(models, toolpath),
+                // The direct search enters each move's puck itself (`direct_one`).
+                || {
+                    if direct {
+                        Extras::from_items(Vec::new(), Vec::new(), 0.0)
+                    } else {
+                        Extras::pucks(models, toolpath)
+                    }
+                },
             )
         },
         || {
