@@ -144,6 +144,156 @@ fn source_geometry(
     Some(g)
 }
 
+/// What a measurement lays out from the program alone, before any vector: the moves' trees
+/// (their columns; for the direct search of a program of translations their volumes and a
+/// ball's runs, with the lists every group of vectors copies from; otherwise the pucks and
+/// the imprint surface's caps and gaps). Laid out for the vectors within a box: [`layout`]
+/// builds it ahead (beside the refinement, in [`crate::pipeline`]), and a measurement
+/// whose vectors leave that box lays out its own.
+pub struct Layout<'a> {
+    models: &'a [&'a SweepModel],
+    toolpath: &'a Toolpath,
+    reach: (DVec3, DVec3),
+    surface: SurfaceModel,
+    locator: Locator,
+    extras: Option<Extras>,
+    columns: Extras,
+    pucks: Extras,
+    volumes: Extras,
+    runs: Option<crate::chains::Runs>,
+    run_tree: Extras,
+    run_lay: Vec<RunListed>,
+    member_lay: Vec<Listed>,
+    column_lay: Vec<Option<ColumnListed>>,
+    puck_lay: Vec<PuckListed>,
+}
+
+/// The layout of `toolpath`'s moves (swept as `models`) for measuring `surface` with the
+/// fast locator, for vectors that lie in the box `reach` (mm; both their ends). See
+/// [`Layout`] and [`measure_then`].
+pub fn layout<'a>(
+    models: &'a [&'a SweepModel],
+    toolpath: &'a Toolpath,
+    surface: SurfaceModel,
+    reach: (DVec3, DVec3),
+) -> Layout<'a> {
+    Layout::new(models, toolpath, surface, Locator::Fast, reach)
+}
+
+impl<'a> Layout<'a> {
+    fn new(
+        models: &'a [&'a SweepModel],
+        toolpath: &'a Toolpath,
+        surface: SurfaceModel,
+        locator: Locator,
+        reach: (DVec3, DVec3),
+    ) -> Layout<'a> {
+        let exact = surface == SurfaceModel::Exact;
+        let direct = exact && locator == Locator::Fast && keeps_axes(toolpath);
+        let puck = models
+            .first()
+            .map_or(Puck { a: 0.0, r: 0.0 }, |m| Puck::of(m.cutter()));
+        let rr = puck.a + puck.r;
+        let ball = puck.a == 0.0;
+        let bull = puck.a > 0.0 && puck.r > 0.0;
+        let none = || Extras::from_items(Vec::new(), Vec::new(), 0.0);
+        // Independent trees: built side by side; a ball's moves in runs too (see
+        // `BallRuns`), after its volumes.
+        let ((columns, (pucks, extras)), (volumes, ball_runs)) = rayon::join(
+            || {
+                rayon::join(
+                    || Extras::columns(models, toolpath, reach),
+                    // The direct search enters each move's puck itself (`direct_one`).
+                    || {
+                        if direct {
+                            (none(), None)
+                        } else {
+                            (
+                                Extras::pucks(models, toolpath),
+                                exact.then(|| Extras::new(models)),
+                            )
+                        }
+                    },
+                )
+            },
+            || {
+                if direct {
+                    let volumes = Extras::volumes(toolpath, puck);
+                    let runs = ball.then(|| BallRuns::of(&volumes, rr));
+                    (volumes, runs)
+                } else {
+                    (none(), None)
+                }
+            },
+        );
+        let (runs, run_tree, run_lay, member_lay) = match ball_runs {
+            Some(b) => (Some(b.runs), b.tree, b.lay, b.members),
+            None => (None, none(), Vec::new(), Vec::new()),
+        };
+        // Each column laid out once for every group that lists it (by item; `None` for a
+        // rotating move's), and a bull's moves likewise.
+        let column_lay: Vec<Option<ColumnListed>> = if direct {
+            (0..columns.items.len() as u32)
+                .into_par_iter()
+                .map(|ci| ColumnListed::of(&columns, ci, toolpath))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let puck_lay: Vec<PuckListed> = if direct && bull {
+            (0..volumes.items.len() as u32)
+                .into_par_iter()
+                .map(|ci| {
+                    let mv = volumes.items[ci as usize].1;
+                    PuckListed::of(&volumes, ci, rr, toolpath.moves[mv as usize].pose.axis)
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        Layout {
+            models,
+            toolpath,
+            reach,
+            surface,
+            locator,
+            extras,
+            columns,
+            pucks,
+            volumes,
+            runs,
+            run_tree,
+            run_lay,
+            member_lay,
+            column_lay,
+            puck_lay,
+        }
+    }
+
+    /// Whether this layout serves a search of `toolpath` (swept as `models`) on `surface` by
+    /// `locator` for vectors in `reach`.
+    fn serves(
+        &self,
+        models: &[&SweepModel],
+        toolpath: &Toolpath,
+        surface: SurfaceModel,
+        locator: Locator,
+        reach: (DVec3, DVec3),
+    ) -> bool {
+        std::ptr::eq(self.toolpath, toolpath)
+            && self.models.len() == models.len()
+            && self
+                .models
+                .iter()
+                .zip(models)
+                .all(|(a, b)| std::ptr::eq(*a, *b))
+            && self.surface == surface
+            && self.locator == locator
+            && (reach.0.cmpgt(reach.1).any()
+                || (reach.0.cmpge(self.reach.0).all() && reach.1.cmple(self.reach.1).all()))
+    }
+}
+
 /// Progress callback: `(vectors done, vectors in all)`; called between chunks.
 pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 
@@ -1419,7 +1569,7 @@ pub fn measure_with_inner(
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
     measure_inner(
-        refined, inner_mm, models, toolpath, cfg, surface, locator, None, None,
+        refined, inner_mm, models, toolpath, cfg, surface, locator, None, None, None,
     )
 }
 
@@ -1447,6 +1597,7 @@ pub fn measure_progress(
         Locator::Fast,
         Some(progress),
         None,
+        None,
     )
 }
 
@@ -1459,17 +1610,17 @@ pub type Redo<'a> = &'a mut dyn FnMut(&Measurement) -> Vec<(usize, f64)>;
 /// readings replace the first ones; the counts stay the first pass's. The same result as
 /// [`measure_progress`] followed by [`measure_with_inner`] on the picked vertices, with the
 /// moves' trees and lists laid out once for both passes (on mount_rush some 40 thousand
-/// vectors that start outside an open relief's material are measured again).
+/// vectors that start outside an open relief's material are measured again): the program,
+/// its models and the surface model are `layout`'s, and so are the trees where its box holds
+/// every vector (see [`layout`]).
 ///
 /// # Errors
 /// As [`measure`], and [`DeviationError::BadLength`] for a picked length that is negative
 /// or not finite, or a picked vertex out of range.
 pub fn measure_then(
     refined: &RefinedMesh,
-    models: &[&SweepModel],
-    toolpath: &Toolpath,
+    layout: &Layout<'_>,
     cfg: &DeviationConfig,
-    surface: SurfaceModel,
     progress: Progress<'_>,
     redo: Redo<'_>,
 ) -> Result<Measurement, DeviationError> {
@@ -1492,13 +1643,14 @@ pub fn measure_then(
     let m = measure_inner(
         refined,
         &inner,
-        models,
-        toolpath,
+        layout.models,
+        layout.toolpath,
         cfg,
-        surface,
+        layout.surface,
         Locator::Fast,
         Some(progress),
         Some(&mut checked),
+        Some(layout),
     )?;
     match bad {
         Some(l) => Err(DeviationError::BadLength {
@@ -1520,6 +1672,7 @@ fn measure_inner(
     locator: Locator,
     progress: Option<Progress<'_>>,
     redo: Option<Redo<'_>>,
+    layout: Option<&Layout<'_>>,
 ) -> Result<Measurement, DeviationError> {
     let ok = |x: f64| x.is_finite() && x >= 0.0;
     let bad = inner_mm.iter().find(|&&x| !ok(x));
@@ -1546,7 +1699,7 @@ fn measure_inner(
         })
         .collect();
     Ok(measure_vectors(
-        &vectors, models, toolpath, cfg.facing, surface, locator, progress, redo,
+        &vectors, models, toolpath, cfg.facing, surface, locator, progress, redo, layout,
     ))
 }
 
@@ -1578,6 +1731,7 @@ pub fn first_entries(
         Locator::Fast,
         None,
         None,
+        None,
     )
     .deviations
     .iter()
@@ -1597,6 +1751,7 @@ fn measure_vectors(
     locator: Locator,
     progress: Option<Progress<'_>>,
     redo: Option<Redo<'_>>,
+    layout: Option<&Layout<'_>>,
 ) -> Measurement {
     let exact = surface == SurfaceModel::Exact;
     let delta = window(models);
@@ -1629,7 +1784,6 @@ fn measure_vectors(
         toolpath,
         puck,
     };
-    let extras = (exact && !direct).then(|| Extras::new(models));
     // Every vector lies in this box.
     let reach = vectors.iter().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
@@ -1638,53 +1792,22 @@ fn measure_vectors(
             (lo.min(p).min(q), hi.max(p).max(q))
         },
     );
-    // Three independent trees: built side by side.
     let rr = puck.a + puck.r;
     let ball = puck.a == 0.0;
-    // A ball's moves in runs too (see `BallRuns`), after its volumes.
-    let ((columns, pucks), (volumes, ball_runs)) = rayon::join(
-        || {
-            rayon::join(
-                || Extras::columns(models, toolpath, reach),
-                // The direct search enters each move's puck itself (`direct_one`).
-                || {
-                    if direct {
-                        Extras::from_items(Vec::new(), Vec::new(), 0.0)
-                    } else {
-                        Extras::pucks(models, toolpath)
-                    }
-                },
-            )
-        },
-        || {
-            if direct {
-                let volumes = Extras::volumes(toolpath, puck);
-                let runs = ball.then(|| BallRuns::of(&volumes, rr));
-                (volumes, runs)
-            } else {
-                (Extras::from_items(Vec::new(), Vec::new(), 0.0), None)
-            }
-        },
-    );
-    let (runs, run_tree, run_lay, member_lay) = match ball_runs {
-        Some(b) => (Some(b.runs), b.tree, b.lay, b.members),
-        None => (
-            None,
-            Extras::from_items(Vec::new(), Vec::new(), 0.0),
-            Vec::new(),
-            Vec::new(),
-        ),
+    // The moves' trees and lists: the caller's where they were laid out for this search and
+    // a box that holds every vector, else laid out here.
+    let own;
+    let lay = match layout.filter(|l| l.serves(models, toolpath, surface, locator, reach)) {
+        Some(l) => l,
+        None => {
+            own = Layout::new(models, toolpath, surface, locator, reach);
+            &own
+        }
     };
-    // Each column laid out once for every group that lists it (by item; `None` for a
-    // rotating move's).
-    let column_lay: Vec<Option<ColumnListed>> = if direct {
-        (0..columns.items.len() as u32)
-            .into_par_iter()
-            .map(|ci| ColumnListed::of(&columns, ci, toolpath))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let (columns, pucks, volumes) = (&lay.columns, &lay.pucks, &lay.volumes);
+    let (runs, run_tree, run_lay, member_lay) =
+        (&lay.runs, &lay.run_tree, &lay.run_lay, &lay.member_lay);
+    let (column_lay, puck_lay) = (&lay.column_lay, &lay.puck_lay);
     let max_slack = runs
         .as_ref()
         .map_or(0.0, |r| r.chords.iter().fold(0.0f64, |m, c| m.max(c.2)));
@@ -1710,9 +1833,9 @@ fn measure_vectors(
     let run_round = round + max_slack;
     // What the tiles and groups gather for the moves: a ball's runs, or the moves.
     let (move_tree, move_round) = if runs.is_some() {
-        (&run_tree, run_round)
+        (run_tree, run_round)
     } else {
-        (&volumes, round)
+        (volumes, round)
     };
     // Entries through a column's bottom are the puck's (found before, or by the imprint
     // surface): only sides and starts are searched. An entry less than `tie` below the best
@@ -2201,7 +2324,7 @@ fn measure_vectors(
                 }
             }
         }
-        if let Some(extras) = &extras {
+        if let Some(extras) = &lay.extras {
             let hi = best.map_or(v.hi, |b| b.0.s);
             extras.visit(&line, hi, |ci, hi| {
                 let (mi, pi, c, _) = extras.items[ci];
@@ -2321,15 +2444,6 @@ fn measure_vectors(
             }
             (None, None) => (dev(None, None), 0.0, None, None, stats),
         }
-    };
-    // A bull's moves laid out once likewise, by item.
-    let puck_lay: Vec<PuckListed> = if direct && bull {
-        (0..volumes.items.len() as u32)
-            .into_par_iter()
-            .map(|ci| PuckListed::of(&volumes, ci, rr, axis_of(volumes.items[ci as usize].1)))
-            .collect()
-    } else {
-        Vec::new()
     };
     // In chunks, for progress; each vector's answer depends on the vector alone. Kept
     // compact (the vector's position and normal are put back at the end) and the counts

@@ -548,25 +548,43 @@ pub fn verify_with_progress(
     // The part's topology, its triangles' tree (for the vectors' material checks and the
     // depths at edges) and the rapids' check need neither the refinement nor each other:
     // they run beside it, on what its serial stretches leave of the threads.
-    let (refined, ((topology, unoriented_tris, rim), part_bvh, (rapids, rapids_s))) = rayon::join(
-        || refine::refine(part, &rcfg),
-        || {
-            let ((topo, bvh), rapids) = rayon::join(
-                || {
-                    rayon::join(
-                        || refine::design_topology(part),
-                        || TriangleBvh::new(part.triangles()),
-                    )
-                },
-                || {
-                    let t = Instant::now();
-                    let r = rapids::check_rapids(part, cutter, toolpath, tol);
-                    (r, t.elapsed().as_secs_f64())
-                },
-            );
-            (topo, bvh, rapids)
-        },
-    );
+    let mut models = vec![&swept];
+    models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
+    // Every vector runs from a point of the part at most the longer of its lengths along a
+    // unit normal: the moves' layout for the measurement needs only that box, and is laid
+    // out beside the refinement too (the measurement lays out its own should a vector leave
+    // the box, as rounding might have it).
+    let reach = {
+        let b = part.bounds();
+        let l = cfg.deviation.inside_mm.max(cfg.deviation.outside_mm);
+        let pad = l + 1e-9 * (1.0 + l + b.min.abs().max(b.max.abs()).max_element());
+        (b.min - DVec3::splat(pad), b.max + DVec3::splat(pad))
+    };
+    let ((refined, layout), ((topology, unoriented_tris, rim), part_bvh, (rapids, rapids_s))) =
+        rayon::join(
+            || {
+                rayon::join(
+                    || refine::refine(part, &rcfg),
+                    || measure::layout(&models, toolpath, cfg.surface, reach),
+                )
+            },
+            || {
+                let ((topo, bvh), rapids) = rayon::join(
+                    || {
+                        rayon::join(
+                            || refine::design_topology(part),
+                            || TriangleBvh::new(part.triangles()),
+                        )
+                    },
+                    || {
+                        let t = Instant::now();
+                        let r = rapids::check_rapids(part, cutter, toolpath, tol);
+                        (r, t.elapsed().as_secs_f64())
+                    },
+                );
+                (topo, bvh, rapids)
+            },
+        );
     let refined = refined?;
     // Refined vertices on a face next to a misoriented or non-manifold edge.
     let mut unoriented = vec![false; refined.len()];
@@ -581,8 +599,6 @@ pub fn verify_with_progress(
     report_stage(Stage::Refine, 1, 1);
 
     let t = Instant::now();
-    let mut models = vec![&swept];
-    models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
     // Inner vector lengths clipped to the material (thin walls, skins open to the sky).
     let measure_progress = |done: usize, total: usize| report_stage(Stage::Measure, done, total);
     let mut inner = material::InnerLengths::default();
@@ -593,10 +609,8 @@ pub fn verify_with_progress(
     };
     let mut m = measure::measure_then(
         &refined,
-        &models,
-        toolpath,
+        &layout,
         &cfg.deviation,
-        cfg.surface,
         &measure_progress,
         &mut clip,
     )?;

@@ -5,7 +5,7 @@
 use cam_core::{Cutter, DVec3, Mesh, Move, MoveKind, Pose, Toolpath, Units};
 use cam_verify::deviation::DeviationConfig;
 use cam_verify::measure::{
-    Locator, Measurement, SurfaceModel, measure_progress, measure_then, measure_with,
+    Locator, Measurement, SurfaceModel, layout, measure_progress, measure_then, measure_with,
     measure_with_inner,
 };
 use cam_verify::model::SweepModel;
@@ -272,16 +272,22 @@ fn measuring_again_in_one_pass_equals_a_second_measurement() {
             picks.clone()
         };
         let none = |_: usize, _: usize| {};
-        let both = measure_then(
-            &r,
-            &[&fwd],
+        // Laid out ahead for a box that holds every vector, and for one that holds none (the
+        // measurement then lays out its own): the same readings.
+        let b = dome().bounds();
+        let pad = DVec3::splat(cfg.inside_mm.max(cfg.outside_mm) + 1e-6);
+        let models = [&fwd];
+        let whole = layout(
+            &models,
             &tp,
-            &cfg,
             SurfaceModel::Exact,
-            &none,
-            &mut pick,
-        )
-        .unwrap();
+            (b.min - pad, b.max + pad),
+        );
+        let small = layout(&models, &tp, SurfaceModel::Exact, (b.min, b.min));
+        let both = measure_then(&r, &whole, &cfg, &none, &mut pick).unwrap();
+        let mut pick_again = |_: &Measurement| picks.clone();
+        let other = measure_then(&r, &small, &cfg, &none, &mut pick_again).unwrap();
+        assert_same(&both, &other, "laid out ahead or not");
         assert_eq!(seen, r.len(), "the first pass is handed over whole");
         let first = measure_progress(&r, &[&fwd], &tp, &cfg, SurfaceModel::Exact, &none).unwrap();
         let sub = RefinedMesh {
@@ -326,9 +332,7 @@ fn measuring_again_in_one_pass_equals_a_second_measurement() {
         assert_eq!(both.linear_mm, expect.linear_mm);
         // A bad length is refused.
         let mut bad = |_: &Measurement| vec![(0, f64::NAN)];
-        assert!(
-            measure_then(&r, &[&fwd], &tp, &cfg, SurfaceModel::Exact, &none, &mut bad).is_err()
-        );
+        assert!(measure_then(&r, &whole, &cfg, &none, &mut bad).is_err());
     }
 }
 
