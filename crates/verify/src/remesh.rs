@@ -189,27 +189,59 @@ pub(crate) fn remesh(
             Some(fm.unwrap_or_else(|| fan(pos0, &divided, &t)))
         })
         .collect();
-    let mut tris = Vec::with_capacity(tris0.len());
-    let mut src = Vec::with_capacity(tris0.len());
-    for (f, (t, m)) in tris0.iter().zip(meshes).enumerate() {
+    // Each face's points and triangles go where the faces before it leave off (in face
+    // order, as one pass would put them), written side by side.
+    let (mut np, mut nt) = (pos.len(), 0);
+    let mut starts = Vec::with_capacity(meshes.len());
+    for m in &meshes {
+        starts.push((np, nt));
         match m {
-            None => {
-                tris.push(*t);
-                src.push(f as u32);
-            }
+            None => nt += 1,
             Some(fm) => {
-                let base = pos.len() as u32;
-                pos.extend_from_slice(&fm.lattice);
-                for lt in fm.tris {
-                    tris.push(lt.map(|l| match l {
-                        Local::Global(g) => g,
-                        Local::Lattice(i) => base + i,
-                    }));
-                    src.push(f as u32);
-                }
+                np += fm.lattice.len();
+                nt += fm.tris.len();
             }
         }
     }
+    let first_new = pos.len();
+    pos.resize(np, DVec3::ZERO);
+    let mut tris = vec![[0u32; 3]; nt];
+    let mut src = vec![0u32; nt];
+    let mut parts = Vec::with_capacity(meshes.len());
+    let (mut prest, mut trest, mut srest) = (&mut pos[first_new..], &mut tris[..], &mut src[..]);
+    for m in &meshes {
+        let (lp, lt) = m
+            .as_ref()
+            .map_or((0, 1), |fm| (fm.lattice.len(), fm.tris.len()));
+        let (p, pr) = prest.split_at_mut(lp);
+        let (t, tr) = trest.split_at_mut(lt);
+        let (s, sr) = srest.split_at_mut(lt);
+        parts.push((p, t, s));
+        (prest, trest, srest) = (pr, tr, sr);
+    }
+    parts
+        .into_par_iter()
+        .zip(&meshes)
+        .zip(&starts)
+        .enumerate()
+        .with_max_len(256)
+        .for_each(|(f, (((p, t, s), m), &(base, _)))| match m {
+            None => {
+                t[0] = tris0[f];
+                s[0] = f as u32;
+            }
+            Some(fm) => {
+                p.copy_from_slice(&fm.lattice);
+                let base = base as u32;
+                for (out, lt) in t.iter_mut().zip(&fm.tris) {
+                    *out = lt.map(|l| match l {
+                        Local::Global(g) => g,
+                        Local::Lattice(i) => base + i,
+                    });
+                }
+                s.fill(f as u32);
+            }
+        });
     Ok(Remeshed { pos, tris, src })
 }
 
