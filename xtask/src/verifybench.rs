@@ -308,8 +308,8 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
         "Stage timings are from the best verify run (Verification::timings): sweep = forward \
          and back-gouge sweep models (imprint curves; a program of translations, every plan \
          here, is measured without them, so only the check that something sweeps is left), \
-         refine = design-surface refinement (remesh, then bisection; the rapids' check and \
-         the part's tree run beside it), \
+         refine = design-surface refinement (remesh, then bisection; the rapids' check, \
+         the part's tree and the moves' layout for the measurement run beside it), \
          measure = each normal vector's first entry into the exact swept volume (for a \
          program of translations, every plan here, a direct search over the moves' volumes; \
          otherwise crossings of the imprint surface refined onto it), the material clip and \

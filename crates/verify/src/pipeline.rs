@@ -99,8 +99,8 @@ pub enum VerifyError {
 pub struct Timings {
     /// Sweeping (forward and reverse).
     pub sweep_s: f64,
-    /// Refining the design surface (and, beside it, checking the rapids and building the
-    /// part's tree).
+    /// Refining the design surface (and, beside it, checking the rapids, building the
+    /// part's tree and laying out the moves for the measurement).
     pub refine_s: f64,
     /// Growing and cutting the vectors.
     pub measure_s: f64,
@@ -546,8 +546,8 @@ pub fn verify_with_progress(
     // reads as a gouge. The bisector points into the material.
     rcfg.crease_angle_deg = 180.0;
     // The part's topology, its triangles' tree (for the vectors' material checks and the
-    // depths at edges) and the rapids' check need neither the refinement nor each other:
-    // they run beside it, on what its serial stretches leave of the threads.
+    // depths at edges), the rapids' check and the moves' layout need neither the refinement
+    // nor each other: they run beside it, on what its serial stretches leave of the threads.
     let mut models = vec![&swept];
     models.extend(reverse.as_ref().filter(|r| !r.pieces.is_empty()));
     // Every vector runs from a point of the part at most the longer of its lengths along a
