@@ -2141,6 +2141,58 @@ fn measure_vectors(
                     }
                 }
                 (None, Some(vols)) => volumes.visit_among(vols, &line, hi0, f),
+                (None, None) if runs.is_some() => {
+                    // A vector no seed entered (most of them far from any move) walks the
+                    // runs' tree, a third as many items as moves on mount_rush, and tests a
+                    // run's members only where it may reach the run: the same moves tried,
+                    // so the same least entry. A node is passed over where the segment
+                    // provably stays farther than `r` and the largest slack from the box of
+                    // its chords (its box shrunk by `r`, less a margin for the growth's
+                    // rounding), decided at either end as for one capsule.
+                    let rr2 = rr * rr;
+                    let reach = rr + max_slack;
+                    let start = line.o + line.lo * line.n;
+                    let clear = |a: DVec3, b: DVec3, hi: f64| {
+                        let eps = 1e-9 * (1.0 + reach + a.abs().max(b.abs()).max_element());
+                        let (ca, cb) = (a + (rr - eps), b - (rr - eps));
+                        clear_of_box(start, line.n, ca, cb, reach * reach)
+                            || clear_of_box(line.o + hi * line.n, -line.n, ca, cb, reach * reach)
+                    };
+                    run_tree.visit_unless(&line, hi0, clear, |ci, _| {
+                        let run = &run_lay[run_tree.items[ci].1 as usize];
+                        let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
+                        let bottom = line.o + line.lo * line.n;
+                        let ch = &run.chord;
+                        if run.may_reach(&line, hi)
+                            && !clear_at_top(
+                                bottom - from_segment(bottom, ch.c0, ch.d, ch.inv_dd),
+                                -line.n,
+                                run.rr2,
+                            )
+                        {
+                            let members =
+                                &member_lay[run.first as usize..(run.first + run.count) as usize];
+                            for c in members {
+                                let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
+                                if found.is_some_and(|(f, m)| {
+                                    m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)
+                                }) {
+                                    continue;
+                                }
+                                if c.may_reach(&line, hi, rr2)
+                                    && !clear_at_top(
+                                        bottom - from_segment(bottom, c.c0, c.d, c.inv_dd),
+                                        -line.n,
+                                        rr2,
+                                    )
+                                {
+                                    try_move(c.ci as usize, &mut found);
+                                }
+                            }
+                        }
+                        found.map_or(hi0, |(f, _)| f.s.min(hi0))
+                    });
+                }
                 (None, None) if ball => volumes.visit_capsules(&line, hi0, puck.r, f),
                 (None, None) => volumes.visit(&line, hi0, f),
             }
