@@ -7,6 +7,7 @@
 //! cargo xtask bench mem                    load time and peak RSS for a 1M-triangle part
 //! cargo xtask bench plan [--quick] [--cutter SPEC]...    plan vs drop-cutter time, holder share
 //! cargo xtask bench verify [--quick] [--cutter SPEC]...  imprint points/s, verify vs plan time
+//! cargo xtask bench verify-one PART PROGRAM TOOL [--runs N]  one program's verify, in-process
 //! cargo xtask plan-report [--quick] [--cutter SPEC]... [--part PATH]...  what planned programs leave, measured
 //! cargo xtask gen-fixtures                 write fixtures/parts/*.obj
 //! ```
@@ -23,6 +24,7 @@ mod planbench;
 mod planreport;
 mod refs;
 mod verifybench;
+mod verifyone;
 
 use std::path::PathBuf;
 
@@ -38,6 +40,10 @@ commands:
                                              points, holder check (--quick: 1 run)
   bench verify [--quick] [--cutter SPEC]...  imprint points/s; verify time vs plan time
                                              (--quick: 1 run, ball:6 unless --cutter)
+  bench verify-one PART PROGRAM TOOL [--runs N]
+                                             verify one G-code program N times in-process
+                                             (default 7): best and median with the refine
+                                             and measure stages
   plan-report [--quick] [--cutter SPEC]... [--part PATH]...
                                              plan, post, read back and z-map dome.obj and
                                              sphere_on_plate (or the given parts): gouge
@@ -94,6 +100,7 @@ fn run(args: Vec<String>) -> Result<()> {
                 imprint_min_s: if quick { 0.2 } else { 1.0 },
             })
         }
+        ["bench", "verify-one", rest @ ..] => verifyone::run(&verifyone::parse(rest)?),
         [mem::CHILD, path] => mem::child(path),
         ["plan-report", rest @ ..] => {
             // `--part PATH` (repeatable) replaces the default parts.
