@@ -450,6 +450,45 @@ impl Listed {
             rr2,
         )
     }
+
+    /// Whether the segment of `line` from its start provably stays farther than `√rr2`
+    /// from the centres' segment, decided at the start as [`misses_capsule_at_bottom`] does.
+    #[inline]
+    fn missed_from_start(&self, line: &Line, rr2: f64) -> bool {
+        let q = line.o + line.lo * line.n;
+        clear_at_top(
+            q - from_segment(q, self.c0, self.d, self.inv_dd),
+            -line.n,
+            rr2,
+        )
+    }
+}
+
+/// A run's members (laid out as [`Listed`], in the run's order) tried for the segment
+/// `lo..best` of `line` (`best` the least entry in `found`, else `hi0`): each that may reach
+/// the segment (and, with `at_start`, is not turned away at its start either) and could
+/// change the answer, skipping the move that holds the best (its entry is computed) and, at
+/// the segment's start, any move numbered higher than it (only a lower one's tie could
+/// replace it).
+#[inline(always)]
+fn try_members(
+    line: &Line,
+    hi0: f64,
+    members: &[Listed],
+    rr2: f64,
+    at_start: bool,
+    found: &mut Option<(Entry, u32)>,
+    mut try_move: impl FnMut(usize, &mut Option<(Entry, u32)>),
+) {
+    for c in members {
+        let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
+        if found.is_some_and(|(f, m)| m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)) {
+            continue;
+        }
+        if c.may_reach(line, hi, rr2) && !(at_start && c.missed_from_start(line, rr2)) {
+            try_move(c.ci as usize, found);
+        }
+    }
 }
 
 /// A listed run of a ball's moves ([`crate::chains`]): its chord laid out as a [`Listed`]
@@ -2124,20 +2163,8 @@ fn measure_vectors(
                         if !run.may_reach(&line, hi) {
                             continue;
                         }
-                        for c in &listed[run.first as usize..(run.first + run.count) as usize] {
-                            let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                            // The move that holds the best has had its entry computed; at
-                            // the segment's start only a lower-numbered move's tie could
-                            // replace it.
-                            if found.is_some_and(|(f, m)| {
-                                m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)
-                            }) {
-                                continue;
-                            }
-                            if c.may_reach(&line, hi, rr2) {
-                                try_move(c.ci as usize, &mut found);
-                            }
-                        }
+                        let members = &listed[run.first as usize..(run.first + run.count) as usize];
+                        try_members(&line, hi0, members, rr2, false, &mut found, &mut try_move);
                     }
                 }
                 (None, Some(vols)) => volumes.visit_among(vols, &line, hi0, f),
@@ -2161,34 +2188,11 @@ fn measure_vectors(
                     run_tree.visit_unless(&line, hi0, clear, |ci, _| {
                         let run = &run_lay[run_tree.items[ci].1 as usize];
                         let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                        let bottom = line.o + line.lo * line.n;
-                        let ch = &run.chord;
-                        if run.may_reach(&line, hi)
-                            && !clear_at_top(
-                                bottom - from_segment(bottom, ch.c0, ch.d, ch.inv_dd),
-                                -line.n,
-                                run.rr2,
-                            )
+                        if run.may_reach(&line, hi) && !run.chord.missed_from_start(&line, run.rr2)
                         {
                             let members =
                                 &member_lay[run.first as usize..(run.first + run.count) as usize];
-                            for c in members {
-                                let hi = found.map_or(hi0, |(f, _)| f.s.min(hi0));
-                                if found.is_some_and(|(f, m)| {
-                                    m == c.mv || (hi <= line.lo && f.s <= line.lo && c.mv >= m)
-                                }) {
-                                    continue;
-                                }
-                                if c.may_reach(&line, hi, rr2)
-                                    && !clear_at_top(
-                                        bottom - from_segment(bottom, c.c0, c.d, c.inv_dd),
-                                        -line.n,
-                                        rr2,
-                                    )
-                                {
-                                    try_move(c.ci as usize, &mut found);
-                                }
-                            }
+                            try_members(&line, hi0, members, rr2, true, &mut found, &mut try_move);
                         }
                         found.map_or(hi0, |(f, _)| f.s.min(hi0))
                     });
