@@ -131,8 +131,8 @@ pub(crate) fn remesh(
     // Past the vertex cap before anything is triangulated: counted, not built (a face of a
     // square metre at s = 0.05 mm would hold some 5e8 lattice points). Counted only where
     // the lattices' bounds (`lattice_bound`, about twice their sizes, with no region test
-    // per point) do not already fit: the count took the dome's refinement a tenth of its
-    // time.
+    // per point) do not already fit: the count cost the dome's ball program 10 M and
+    // sphere_on_plate's 19 M instructions.
     let fits = |room: usize| {
         tris0
             .par_iter()
@@ -192,9 +192,9 @@ pub(crate) fn remesh(
     // Each face's points and triangles go where the faces before it leave off (in face
     // order, as one pass would put them), written side by side.
     let (mut np, mut nt) = (pos.len(), 0);
-    let mut starts = Vec::with_capacity(meshes.len());
+    let mut bases = Vec::with_capacity(meshes.len());
     for m in &meshes {
-        starts.push((np, nt));
+        bases.push(np as u32);
         match m {
             None => nt += 1,
             Some(fm) => {
@@ -222,17 +222,16 @@ pub(crate) fn remesh(
     parts
         .into_par_iter()
         .zip(&meshes)
-        .zip(&starts)
+        .zip(&bases)
         .enumerate()
         .with_max_len(256)
-        .for_each(|(f, (((p, t, s), m), &(base, _)))| match m {
+        .for_each(|(f, (((p, t, s), m), &base))| match m {
             None => {
                 t[0] = tris0[f];
                 s[0] = f as u32;
             }
             Some(fm) => {
                 p.copy_from_slice(&fm.lattice);
-                let base = base as u32;
                 for (out, lt) in t.iter_mut().zip(&fm.tris) {
                     *out = lt.map(|l| match l {
                         Local::Global(g) => g,

@@ -318,10 +318,8 @@ fn measuring_again_in_one_pass_equals_a_second_measurement() {
         }
         let changed = picks
             .iter()
-            .filter(|&&(i, _)| {
-                first.deviations[i]
-                    != again.deviations[picks.iter().position(|p| p.0 == i).unwrap()]
-            })
+            .enumerate()
+            .filter(|&(k, &(i, _))| first.deviations[i] != again.deviations[k])
             .count();
         assert!(
             changed > 0,
