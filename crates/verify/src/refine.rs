@@ -693,6 +693,11 @@ const ALL_FACES_COS: f64 = -0.9995;
 const HEMISPHERE_COS: f64 = 0.017_452_406_437_283_5;
 
 /// Vertex normals by smooth groups; duplicates vertices on creases.
+///
+/// Most vertices lie inside one design face (a remeshed face's lattice, a bisection's
+/// midpoint): every face around them has that face's normal, which is theirs. Only the
+/// vertices whose faces come from several design faces (on the design's edges and corners)
+/// are averaged, over their corners listed in face order.
 fn vertex_normals(
     mesh: &Mesh,
     pos: Vec<DVec3>,
@@ -706,25 +711,55 @@ fn vertex_normals(
         .par_iter()
         .map(|t| t.normal().unwrap_or(DVec3::Z))
         .collect();
-    let face_n: Vec<DVec3> = src.par_iter().map(|&s| design_n[s as usize]).collect();
-    // Incidence in CSR form: corners (face, k) per vertex, in face order.
-    let mut start = vec![0u32; pos.len() + 1];
-    for t in &tris {
+    let face_n = |f: u32| design_n[src[f as usize] as usize];
+    // Per vertex: the one design face its faces lie in, `MIXED` where they lie in several,
+    // `UNUSED` where no face uses it.
+    const UNUSED: u32 = u32::MAX;
+    const MIXED: u32 = u32::MAX - 1;
+    let mut state = vec![UNUSED; pos.len()];
+    for (t, &s) in tris.iter().zip(src) {
         for &v in t {
-            start[v as usize + 1] += 1;
+            let st = &mut state[v as usize];
+            if *st == UNUSED {
+                *st = s;
+            } else if *st != s {
+                *st = MIXED;
+            }
         }
     }
-    for i in 0..pos.len() {
+    // The mixed vertices (numbered in vertex order) and their corners (face, k) in CSR
+    // form, in face order.
+    let mut index = vec![u32::MAX; pos.len()];
+    let mut mixed: Vec<u32> = Vec::new();
+    for (v, &st) in state.iter().enumerate() {
+        if st == MIXED {
+            index[v] = mixed.len() as u32;
+            mixed.push(v as u32);
+        }
+    }
+    let mut start = vec![0u32; mixed.len() + 1];
+    for t in &tris {
+        for &v in t {
+            if state[v as usize] == MIXED {
+                start[index[v as usize] as usize + 1] += 1;
+            }
+        }
+    }
+    for i in 0..mixed.len() {
         start[i + 1] += start[i];
     }
     let mut fill = start.clone();
-    let mut corners = vec![(0u32, 0u8); tris.len() * 3];
+    let mut corners = vec![(0u32, 0u8); start[mixed.len()] as usize];
     for (f, t) in tris.iter().enumerate() {
         for (k, &v) in t.iter().enumerate() {
-            corners[fill[v as usize] as usize] = (f as u32, k as u8);
-            fill[v as usize] += 1;
+            if state[v as usize] == MIXED {
+                let m = index[v as usize] as usize;
+                corners[fill[m] as usize] = (f as u32, k as u8);
+                fill[m] += 1;
+            }
         }
     }
+    drop(fill);
     let angle = |f: u32, k: u8| {
         let t = tris[f as usize];
         let k = k as usize;
@@ -734,16 +769,15 @@ fn vertex_normals(
             pos[t[(k + 2) % 3] as usize],
         )
     };
-    // Per vertex, in parallel over blocks of vertices: its distinct normals in the order of
-    // its corners (`normals`, `count` per vertex) and each corner's index among them (`slot`,
-    // aligned with `corners`); then, in order, the output vertices and the triangles'
-    // corners. The same as one pass over the vertices in order.
-    const BLOCK: usize = 4096;
+    // Per mixed vertex, in parallel over blocks of them: its distinct normals in the order
+    // of its corners (`normals`, `count` per vertex) and each corner's index among them
+    // (`slot`, aligned with `corners`). The same as one pass over the vertices in order.
+    const BLOCK: usize = 1024;
     let mut slot = vec![0u32; corners.len()];
     let mut slices = Vec::new();
     let mut rest = slot.as_mut_slice();
-    for b in (0..pos.len()).step_by(BLOCK) {
-        let e = (b + BLOCK).min(pos.len());
+    for b in (0..mixed.len()).step_by(BLOCK) {
+        let e = (b + BLOCK).min(mixed.len());
         let (head, tail) = rest.split_at_mut((start[e] - start[b]) as usize);
         slices.push((b, e, head));
         rest = tail;
@@ -758,17 +792,14 @@ fn vertex_normals(
             let mut angles: Vec<f64> = Vec::new();
             let mut order: Vec<usize> = Vec::new();
             let base = start[b] as usize;
-            for v in b..e {
-                let (c0, c1) = (start[v] as usize, start[v + 1] as usize);
+            for m in b..e {
+                let (c0, c1) = (start[m] as usize, start[m + 1] as usize);
                 let cs = &corners[c0..c1];
                 let slot = &mut slot[c0 - base..c1 - base];
                 let first = normals.len();
-                if cs.is_empty() {
-                    count.push(0);
-                    continue;
-                }
-                let n0 = face_n[cs[0].0 as usize];
-                if cs.iter().all(|&(f, _)| face_n[f as usize] == n0) {
+                // Design faces apart, but of one normal (coplanar).
+                let n0 = face_n(cs[0].0);
+                if cs.iter().all(|&(f, _)| face_n(f) == n0) {
                     normals.push(n0);
                     count.push(1);
                     slot.fill(0);
@@ -787,13 +818,11 @@ fn vertex_normals(
                 // within 89° of the first, so any two within 178°: every corner's sum takes
                 // every face, in the same order, and is the same. Summed once.
                 if cos_crease <= ALL_FACES_COS
-                    && cs
-                        .iter()
-                        .all(|&(g, _)| face_n[g as usize].dot(n0) >= HEMISPHERE_COS)
+                    && cs.iter().all(|&(g, _)| face_n(g).dot(n0) >= HEMISPHERE_COS)
                 {
                     let mut sum = DVec3::ZERO;
                     for &i in &order {
-                        sum += angles[i] * face_n[cs[i].0 as usize];
+                        sum += angles[i] * face_n(cs[i].0);
                     }
                     normals.push(sum.try_normalize().unwrap_or(n0));
                     count.push(1);
@@ -801,10 +830,10 @@ fn vertex_normals(
                     continue;
                 }
                 for (i, &(f, _)) in cs.iter().enumerate() {
-                    let nf = face_n[f as usize];
+                    let nf = face_n(f);
                     let mut sum = DVec3::ZERO;
                     for &i in &order {
-                        let ng = face_n[cs[i].0 as usize];
+                        let ng = face_n(cs[i].0);
                         if ng.dot(nf) >= cos_crease {
                             sum += angles[i] * ng;
                         }
@@ -823,33 +852,53 @@ fn vertex_normals(
             (normals, count)
         })
         .collect();
-    // One normal per vertex (always so without creases, e.g. at 180°): the vertices and
-    // faces stay as they are.
-    if blocks
-        .iter()
-        .all(|(_, count)| count.iter().all(|&c| c == 1))
-    {
-        let mut normals = Vec::with_capacity(pos.len());
-        for (n, _) in blocks {
-            normals.extend(n);
-        }
+    let mut mixed_n = Vec::with_capacity(mixed.len());
+    let mut mixed_count = Vec::with_capacity(mixed.len());
+    for (n, c) in blocks {
+        mixed_n.extend(n);
+        mixed_count.extend(c);
+    }
+    // One normal per vertex (always so without creases, e.g. at 180°, and with every vertex
+    // used): the vertices and faces stay as they are.
+    if !state.contains(&UNUSED) && mixed_count.iter().all(|&c| c == 1) {
+        let normals = state
+            .par_iter()
+            .zip(&index)
+            .map(|(&st, &m)| match st {
+                MIXED => mixed_n[m as usize],
+                s => design_n[s as usize],
+            })
+            .collect();
         return (pos, normals, tris);
     }
+    // Each vertex as many times as it has normals (none where unused), in order; each
+    // corner to its copy.
+    let mut base = Vec::with_capacity(pos.len());
     let mut out_pos = Vec::with_capacity(pos.len());
     let mut out_n = Vec::with_capacity(pos.len());
-    let mut out_tris = tris.clone();
-    for (bi, (normals, count)) in blocks.into_iter().enumerate() {
-        let b = bi * BLOCK;
-        for (i, &c) in count.iter().enumerate() {
-            let v = b + i;
-            let idx = out_pos.len() as u32;
-            out_pos.extend(std::iter::repeat_n(pos[v], c as usize));
-            for ci in start[v] as usize..start[v + 1] as usize {
-                let (f, k) = corners[ci];
-                out_tris[f as usize][k as usize] = idx + slot[ci];
+    let mut next_n = 0usize;
+    for (v, &st) in state.iter().enumerate() {
+        base.push(out_pos.len() as u32);
+        match st {
+            UNUSED => {}
+            MIXED => {
+                let c = mixed_count[index[v] as usize] as usize;
+                out_pos.extend(std::iter::repeat_n(pos[v], c));
+                out_n.extend_from_slice(&mixed_n[next_n..next_n + c]);
+                next_n += c;
+            }
+            s => {
+                out_pos.push(pos[v]);
+                out_n.push(design_n[s as usize]);
             }
         }
-        out_n.extend(normals);
+    }
+    let mut out_tris: Vec<[u32; 3]> = tris.iter().map(|t| t.map(|v| base[v as usize])).collect();
+    for (m, &v) in mixed.iter().enumerate() {
+        for ci in start[m] as usize..start[m + 1] as usize {
+            let (f, k) = corners[ci];
+            out_tris[f as usize][k as usize] = base[v as usize] + slot[ci];
+        }
     }
     (out_pos, out_n, out_tris)
 }
@@ -990,6 +1039,39 @@ mod tests {
     /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
     /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
     /// used).
+    /// A vertex no face uses is left out, and the faces keep their corners' positions and
+    /// normals (a crease between them, so that vertices are duplicated too).
+    #[test]
+    fn vertex_normals_leave_out_unused_vertices() {
+        let g = DVec3::new(40.0, 0.0, 0.0);
+        let tris = vec![
+            Triangle::new(g, g + DVec3::X, g + DVec3::Y),
+            Triangle::new(g, g + DVec3::Z, g + DVec3::X),
+        ];
+        let m = mesh(tris);
+        let (pos, faces) = weld(&m);
+        // An unused point first: every index moves up by one.
+        let mut with = vec![DVec3::splat(7.0)];
+        with.extend(&pos);
+        let shifted: Vec<[u32; 3]> = faces.iter().map(|t| t.map(|v| v + 1)).collect();
+        let src = [0u32, 1];
+        for deg in [180.0, 30.0] {
+            let (p0, n0, t0) = vertex_normals(&m, pos.clone(), faces.clone(), &src, deg);
+            let (p1, n1, t1) = vertex_normals(&m, with.clone(), shifted.clone(), &src, deg);
+            assert_eq!((p0.len(), n0.len()), (p1.len(), n1.len()), "{deg}°");
+            assert!(!p1.contains(&DVec3::splat(7.0)), "{deg}°");
+            for (a, b) in t0.iter().zip(&t1) {
+                for k in 0..3 {
+                    let (i, j) = (a[k] as usize, b[k] as usize);
+                    assert_eq!((p0[i], n0[i]), (p1[j], n1[j]), "{deg}°");
+                }
+            }
+        }
+        // At 30° the fold's two vertices on the crease are duplicated: 4 + 2.
+        let (p, _, _) = vertex_normals(&m, with, shifted, &src, 30.0);
+        assert_eq!(p.len(), 6);
+    }
+
     #[test]
     fn vertex_normals_equal_the_corner_by_corner_definition() {
         let mut tris = Vec::new();
