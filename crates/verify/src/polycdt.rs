@@ -284,13 +284,19 @@ impl PolyCdt {
         // a spacing (two equilateral triangles across each), but not across a gap a region
         // left in a row, nor where four of their points lie on one circle (rows of a square
         // grid) and the tie goes the other way.
-        let adj = &self.adj;
-        self.stack.extend(
-            (0..adj.len())
+        // An edge whose two opposite angles are both clearly acute is locally Delaunay
+        // (their sum is below 180°) and stays so until a flip next to it, which stacks it
+        // again: it is left off (the strips' equilateral pairs, most of the edges).
+        let mut stack = std::mem::take(&mut self.stack);
+        stack.extend(
+            (0..self.adj.len() as u32)
                 .flat_map(|t| (0..3).map(move |e| (t, e)))
-                .filter(|&(t, e)| adj[t][e] != NONE && (t as u32) < adj[t][e])
-                .map(|(t, e)| (t as u32, e)),
+                .filter(|&(t, e)| {
+                    let u = self.adj[t as usize][e];
+                    u != NONE && t < u && !self.clearly_delaunay(t, e, u)
+                }),
         );
+        self.stack = stack;
         self.flip_all();
         Some(())
     }
@@ -546,6 +552,25 @@ impl PolyCdt {
                 return;
             }
         }
+    }
+
+    /// Whether edge `k` of triangle `t` (across it, triangle `u`) is locally Delaunay with
+    /// room to spare: the angles opposite it in both triangles are acute by a margin
+    /// (cosine above 2e-6) that the rounding of the differences (each correctly rounded)
+    /// and of the dot products cannot eat. `false` says nothing.
+    #[inline]
+    fn clearly_delaunay(&self, t: u32, k: usize, u: u32) -> bool {
+        let v = self.tris[t as usize];
+        let (a, b) = (self.pts[v[k] as usize], self.pts[v[(k + 1) % 3] as usize]);
+        let acute = |o: u32| {
+            let o = self.pts[o as usize];
+            let (u, w) = ([a[0] - o[0], a[1] - o[1]], [b[0] - o[0], b[1] - o[1]]);
+            let dot = u[0] * w[0] + u[1] * w[1];
+            dot > 1e-6 * (u[0] * u[0] + u[1] * u[1] + w[0] * w[0] + w[1] * w[1])
+        };
+        let w = self.tris[u as usize];
+        let q = (0..3).find(|&j| w[j] != v[k] && w[j] != v[(k + 1) % 3]);
+        acute(v[(k + 2) % 3]) && q.is_some_and(|j| acute(w[j]))
     }
 
     /// Flips the edges on the stack that are not locally Delaunay (the point opposite across
