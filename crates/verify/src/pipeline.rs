@@ -237,10 +237,15 @@ fn crease_depths(
         Some(rim) => refine::rim_vertices_near(refined, rim),
         None => vec![false; nv],
     };
-    // Per vertex, the least cosine between its normal and its faces' normals, and a design
-    // face it lies in (the source of the last refined face around it): over the faces in a
-    // few pieces side by side, then merged (the least of the pieces' least, the last
-    // piece's face), the same as one pass in order whatever the number of pieces.
+    // Only a vertex read as a gouge is looked at below.
+    let gouged: Vec<bool> = devs
+        .par_iter()
+        .map(|d| d.signed_mm.is_some_and(|s| s < 0.0))
+        .collect();
+    // Per such vertex, the least cosine between its normal and its faces' normals, and a
+    // design face it lies in (the source of the last refined face around it): over the
+    // faces in a few pieces side by side, then merged (the least of the pieces' least, the
+    // last piece's face), the same as one pass in order whatever the number of pieces.
     let pieces = rayon::current_num_threads().clamp(1, 8);
     let len = refined.triangles.len().div_ceil(pieces).max(1);
     let parts: Vec<(Vec<f64>, Vec<u32>)> = refined
@@ -250,6 +255,9 @@ fn crease_depths(
         .map(|(p, ts)| {
             let (mut cos_min, mut own) = (vec![1.0f64; nv], vec![u32::MAX; nv]);
             for (j, t) in ts.iter().enumerate() {
+                if !t.iter().any(|&i| gouged[i as usize]) {
+                    continue;
+                }
                 if let Some(&src) = refined.face_source.get(p * len + j) {
                     for &i in t {
                         own[i as usize] = src;
