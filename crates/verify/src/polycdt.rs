@@ -7,13 +7,14 @@
 //! side), each inner point splits the triangle (or the inner edge) it falls in, and edges
 //! that are not locally Delaunay are flipped. Hull edges (the polygon's sides) are never
 //! flipped, so they are the constraints, and no triangle ever lies outside the polygon,
-//! even where rounding puts an edge point a hair off its side. Where the Delaunay triangulation is unique (no four
-//! points on one empty circle) the result is the constrained Delaunay triangulation spade
-//! builds, at a fraction of its cost for the few dozen points of a typical face; where it
-//! is not, ties are broken by the points' coordinates (see `PolyCdt::first_of`), so the
-//! result does not depend on the order the points came in; a point
-//! that cannot be placed (a duplicate, or one outside the polygon) makes the whole
-//! triangulation fail and the caller falls back to spade.
+//! even where rounding puts an edge point a hair off its side. Where the Delaunay
+//! triangulation is unique (no four points on one empty circle) the result is the
+//! constrained Delaunay triangulation spade builds, at a fraction of its cost for the few
+//! dozen points of a typical face; where it is not, ties are broken by the points'
+//! coordinates (see `PolyCdt::first_of`), so the result does not depend on the order the
+//! points came in nor on the triangulation the flips start from; a point that cannot be
+//! placed (a duplicate, or one outside the polygon) makes the whole triangulation fail and
+//! the caller falls back to spade.
 
 use std::collections::HashMap;
 use std::hash::BuildHasherDefault;
