@@ -1032,13 +1032,6 @@ mod tests {
         }
     }
 
-    /// The vertex normals against the definition, corner by corner: each corner's normal is
-    /// the angle-weighted sum of the normals of the vertex's faces within the crease angle
-    /// of its own face, in face order, normalised (their one normal where they share it). Across every crease (180°, where one sum
-    /// serves every corner of a vertex whose faces lie within 89° of the first), and at
-    /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
-    /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
-    /// used).
     /// A vertex no face uses is left out, and the faces keep their corners' positions and
     /// normals (a crease between them, so that vertices are duplicated too).
     #[test]
@@ -1072,6 +1065,13 @@ mod tests {
         assert_eq!(p.len(), 6);
     }
 
+    /// The vertex normals against the definition, corner by corner: each corner's normal is
+    /// the angle-weighted sum of the normals of the vertex's faces within the crease angle
+    /// of its own face, in face order, normalised (their one normal where they share it). Across every crease (180°, where one sum
+    /// serves every corner of a vertex whose faces lie within 89° of the first), and at
+    /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
+    /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
+    /// used).
     #[test]
     fn vertex_normals_equal_the_corner_by_corner_definition() {
         let mut tris = Vec::new();
