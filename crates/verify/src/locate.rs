@@ -385,14 +385,24 @@ fn spread(v: u64) -> u64 {
 
 /// Morton codes of points within their bounds (ties keep index order when sorted with it).
 pub fn morton_codes(points: &[DVec3]) -> Vec<u64> {
-    let (lo, hi) = points.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(a, b), &c| (a.min(c), b.max(c)),
-    );
-    let scale = (hi - lo).max(DVec3::splat(1e-300));
-    points
+    morton_codes_by(points, |&p| p)
+}
+
+/// [`morton_codes`] of the points `at(item)` of `items`, without collecting them first.
+pub(crate) fn morton_codes_by<T: Sync>(items: &[T], at: impl Fn(&T) -> DVec3 + Sync) -> Vec<u64> {
+    let empty = || (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let (lo, hi) = items
         .par_iter()
-        .map(|&c| {
+        .fold(empty, |(a, b), it| {
+            let c = at(it);
+            (a.min(c), b.max(c))
+        })
+        .reduce(empty, |(a, b), (c, d)| (a.min(c), b.max(d)));
+    let scale = (hi - lo).max(DVec3::splat(1e-300));
+    items
+        .par_iter()
+        .map(|it| {
+            let c = at(it);
             let q = ((c - lo) / scale * 2_097_151.0).clamp(DVec3::ZERO, DVec3::splat(2_097_151.0));
             if !q.is_finite() {
                 return 0;

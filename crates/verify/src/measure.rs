@@ -1588,8 +1588,18 @@ pub fn measure_with(
     surface: SurfaceModel,
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
-    let inner = vec![cfg.inside_mm; refined.positions.len()];
-    measure_with_inner(refined, &inner, models, toolpath, cfg, surface, locator)
+    measure_inner(
+        refined,
+        Inner::All(cfg.inside_mm),
+        models,
+        toolpath,
+        cfg,
+        surface,
+        locator,
+        None,
+        None,
+        None,
+    )
 }
 
 /// [`measure_with`] with each vector's inner length `L_in(v)` given per vertex (mm, in
@@ -1608,7 +1618,16 @@ pub fn measure_with_inner(
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
     measure_inner(
-        refined, inner_mm, models, toolpath, cfg, surface, locator, None, None, None,
+        refined,
+        Inner::Each(inner_mm),
+        models,
+        toolpath,
+        cfg,
+        surface,
+        locator,
+        None,
+        None,
+        None,
     )
 }
 
@@ -1625,10 +1644,9 @@ pub fn measure_progress(
     surface: SurfaceModel,
     progress: Progress<'_>,
 ) -> Result<Measurement, DeviationError> {
-    let inner = vec![cfg.inside_mm; refined.positions.len()];
     measure_inner(
         refined,
-        &inner,
+        Inner::All(cfg.inside_mm),
         models,
         toolpath,
         cfg,
@@ -1663,7 +1681,6 @@ pub fn measure_then(
     progress: Progress<'_>,
     redo: Redo<'_>,
 ) -> Result<Measurement, DeviationError> {
-    let inner = vec![cfg.inside_mm; refined.positions.len()];
     let n = refined.positions.len();
     let mut bad: Option<f64> = None;
     let mut checked = |m: &Measurement| {
@@ -1681,7 +1698,7 @@ pub fn measure_then(
     };
     let m = measure_inner(
         refined,
-        &inner,
+        Inner::All(cfg.inside_mm),
         layout.models,
         layout.toolpath,
         cfg,
@@ -1700,10 +1717,17 @@ pub fn measure_then(
     }
 }
 
+/// The vectors' inner lengths (mm): one for all, or one per vertex.
+#[derive(Clone, Copy)]
+enum Inner<'a> {
+    All(f64),
+    Each(&'a [f64]),
+}
+
 #[allow(clippy::too_many_arguments)]
 fn measure_inner(
     refined: &RefinedMesh,
-    inner_mm: &[f64],
+    inner: Inner<'_>,
     models: &[&SweepModel],
     toolpath: &Toolpath,
     cfg: &DeviationConfig,
@@ -1714,26 +1738,33 @@ fn measure_inner(
     layout: Option<&Layout<'_>>,
 ) -> Result<Measurement, DeviationError> {
     let ok = |x: f64| x.is_finite() && x >= 0.0;
-    let bad = inner_mm.iter().find(|&&x| !ok(x));
-    if !ok(cfg.inside_mm)
-        || !ok(cfg.outside_mm)
-        || bad.is_some()
-        || inner_mm.len() != refined.positions.len()
-    {
+    let (bad, sized) = match inner {
+        Inner::All(l) => ((!ok(l)).then_some(l), true),
+        Inner::Each(ls) => (
+            ls.par_iter().copied().find_first(|&x| !ok(x)),
+            ls.len() == refined.positions.len(),
+        ),
+    };
+    if !ok(cfg.inside_mm) || !ok(cfg.outside_mm) || bad.is_some() || !sized {
         return Err(DeviationError::BadLength {
-            inside_mm: bad.copied().unwrap_or(cfg.inside_mm),
+            inside_mm: bad.unwrap_or(cfg.inside_mm),
             outside_mm: cfg.outside_mm,
         });
     }
+    // Built in parallel: at several hundred thousand vertices the copy (and the pages it
+    // touches first) is felt.
     let vectors: Vec<Vector> = refined
         .positions
-        .iter()
+        .par_iter()
         .zip(&refined.normals)
-        .zip(inner_mm)
-        .map(|((&o, &n), &l_in)| Vector {
+        .enumerate()
+        .map(|(i, (&o, &n))| Vector {
             o,
             n,
-            lo: -l_in,
+            lo: -match inner {
+                Inner::All(l) => l,
+                Inner::Each(ls) => ls[i],
+            },
             hi: cfg.outside_mm,
         })
         .collect();
@@ -1824,13 +1855,14 @@ fn measure_vectors(
         puck,
     };
     // Every vector lies in this box.
-    let reach = vectors.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), v| {
+    let empty = || (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
+    let reach = vectors
+        .par_iter()
+        .fold(empty, |(lo, hi), v| {
             let (p, q) = (v.o + v.lo * v.n, v.o + v.hi * v.n);
             (lo.min(p).min(q), hi.max(p).max(q))
-        },
-    );
+        })
+        .reduce(empty, |(a, b), (c, d)| (a.min(c), b.max(d)));
     let rr = puck.a + puck.r;
     let ball = puck.a == 0.0;
     // The moves' trees and lists: the caller's where they were laid out for this search and
@@ -2518,9 +2550,9 @@ fn measure_vectors(
                 // In tiles of neighbouring vectors (Morton order of their origins), each seeded
                 // by the move that cut one before it; the seeds only prune (the answers do not
                 // depend on them, but for the last bits of a bull's Newton solve).
-                let codes =
-                    crate::locate::morton_codes(&chunk.iter().map(|v| v.o).collect::<Vec<_>>());
-                let mut order: Vec<(u64, u32)> = codes.into_iter().zip(0u32..).collect();
+                let codes = crate::locate::morton_codes_by(chunk, |v| v.o);
+                let mut order: Vec<(u64, u32)> =
+                    codes.into_par_iter().zip(0..chunk.len() as u32).collect();
                 order.par_sort_unstable();
                 let done: Vec<TileReadings> = order
                     .par_chunks(DIRECT_TILE)
