@@ -541,6 +541,17 @@ fn longest_edge(pos: &[DVec3], t: &[u32; 3]) -> usize {
     best
 }
 
+/// Removes the items of `v` at the indices `gone` (ascending), keeping the rest in order.
+fn remove_at<T>(v: &mut Vec<T>, gone: impl Iterator<Item = usize>) {
+    let mut gone = gone.peekable();
+    let mut i = 0;
+    v.retain(|_| {
+        let drop = gone.next_if_eq(&i).is_some();
+        i += 1;
+        !drop
+    });
+}
+
 /// Conforming longest-edge refinement (Rivara's 4-triangle longest-edge partition), in
 /// rounds: every face whose longest edge exceeds `s` marks that edge; then, until nothing
 /// changes, every face with a marked edge also marks its longest edge (conformity closure).
@@ -565,31 +576,40 @@ fn split_edges(
         return Err(c);
     }
     // A face whose longest edge is ≤ s is final: only edges longer than s are ever split.
-    // Only the others (`active`) are revisited.
-    let mut done: Vec<[u32; 3]> = Vec::with_capacity(tris.len());
-    let mut done_src: Vec<u32> = Vec::with_capacity(tris.len());
-    // Faces outside the region with an edge longer than s: split only when a neighbour's
-    // split reaches them (to stay conforming), else final once nothing is active.
+    // Only the others (`active`) are revisited. Faces outside the region with an edge longer
+    // than s (`dormant`): split only when a neighbour's split reaches them (to stay
+    // conforming), else final once nothing is active.
+    let long = |pos: &[DVec3], t: &[u32; 3]| {
+        let k = longest_edge(pos, t);
+        (pos[t[k] as usize].distance_squared(pos[t[(k + 1) % 3] as usize]) > s2).then_some(k)
+    };
+    // The first round's faces (the remesh's: hundreds of thousands, nearly all final) are
+    // classified in parallel and the final ones kept where they are, in order; the faces
+    // the rounds make are few.
+    let first: Vec<(usize, usize, bool)> = tris
+        .par_iter()
+        .zip(&src)
+        .enumerate()
+        .filter_map(|(i, (t, &sidx))| long(&pos, t).map(|k| (i, k, inside(&pos, t, sidx))))
+        .collect();
+    let mut active = Vec::new();
+    let mut active_src = Vec::new();
+    let mut longest = Vec::new();
     let mut dormant: Vec<([u32; 3], u32, usize)> = Vec::new();
-    loop {
-        let mut active = Vec::with_capacity(tris.len());
-        let mut active_src = Vec::with_capacity(tris.len());
-        let mut longest = Vec::with_capacity(tris.len());
-        for (t, &sidx) in tris.iter().zip(&src) {
-            let k = longest_edge(&pos, t);
-            if pos[t[k] as usize].distance_squared(pos[t[(k + 1) % 3] as usize]) > s2 {
-                if inside(&pos, t, sidx) {
-                    active.push(*t);
-                    active_src.push(sidx);
-                    longest.push(k);
-                } else {
-                    dormant.push((*t, sidx, k));
-                }
-            } else {
-                done.push(*t);
-                done_src.push(sidx);
-            }
+    for &(i, k, ins) in &first {
+        if ins {
+            active.push(tris[i]);
+            active_src.push(src[i]);
+            longest.push(k);
+        } else {
+            dormant.push((tris[i], src[i], k));
         }
+    }
+    remove_at(&mut tris, first.iter().map(|f| f.0));
+    remove_at(&mut src, first.iter().map(|f| f.0));
+    drop(first);
+    let (mut done, mut done_src) = (tris, src);
+    loop {
         if active.is_empty() {
             for (t, sidx, _) in dormant {
                 done.push(t);
@@ -675,8 +695,22 @@ fn split_edges(
             }
             ns.extend(std::iter::repeat_n(sidx, nt.len() - before));
         }
-        tris = nt;
-        src = ns;
+        // The next round's faces: final, active or dormant.
+        (active, active_src, longest) = (Vec::new(), Vec::new(), Vec::new());
+        for (t, sidx) in nt.into_iter().zip(ns) {
+            match long(&pos, &t) {
+                None => {
+                    done.push(t);
+                    done_src.push(sidx);
+                }
+                Some(k) if inside(&pos, &t, sidx) => {
+                    active.push(t);
+                    active_src.push(sidx);
+                    longest.push(k);
+                }
+                Some(k) => dormant.push((t, sidx, k)),
+            }
+        }
     }
 }
 
