@@ -237,11 +237,25 @@ fn crease_depths(
         Some(rim) => refine::rim_vertices_near(refined, rim),
         None => vec![false; nv],
     };
-    // Only a vertex read as a gouge is looked at below.
-    let gouged: Vec<bool> = devs
+    // Only a vertex read as a gouge is looked at below: each such vertex's slot among them
+    // (`NONE` for the others).
+    const NONE: u32 = u32::MAX;
+    let mut slot: Vec<u32> = devs
         .par_iter()
-        .map(|d| d.signed_mm.is_some_and(|s| s < 0.0))
+        .map(|d| {
+            if d.signed_mm.is_some_and(|s| s < 0.0) {
+                0
+            } else {
+                NONE
+            }
+        })
         .collect();
+    let mut ng = 0;
+    for k in slot.iter_mut().filter(|k| **k != NONE) {
+        *k = ng;
+        ng += 1;
+    }
+    let ng = ng as usize;
     // Per such vertex, the least cosine between its normal and its faces' normals, and a
     // design face it lies in (the source of the last refined face around it): over the
     // faces in a few pieces side by side, then merged (the least of the pieces' least, the
@@ -253,39 +267,41 @@ fn crease_depths(
         .par_chunks(len)
         .enumerate()
         .map(|(p, ts)| {
-            let (mut cos_min, mut own) = (vec![1.0f64; nv], vec![u32::MAX; nv]);
+            let (mut cos_min, mut own) = (vec![1.0f64; ng], vec![NONE; ng]);
             for (j, t) in ts.iter().enumerate() {
-                if !t.iter().any(|&i| gouged[i as usize]) {
+                if t.iter().all(|&i| slot[i as usize] == NONE) {
                     continue;
                 }
+                let gs = t.map(|i| slot[i as usize]);
                 if let Some(&src) = refined.face_source.get(p * len + j) {
-                    for &i in t {
-                        own[i as usize] = src;
+                    for g in gs.into_iter().filter(|&g| g != NONE) {
+                        own[g as usize] = src;
                     }
                 }
                 let [a, b, c] = t.map(|i| refined.positions[i as usize]);
                 let Some(nf) = (b - a).cross(c - a).try_normalize() else {
                     continue;
                 };
-                for &i in t {
-                    let i = i as usize;
-                    cos_min[i] = cos_min[i].min(refined.normals[i].dot(nf));
+                for (&i, g) in t.iter().zip(gs).filter(|&(_, g)| g != NONE) {
+                    let g = g as usize;
+                    cos_min[g] = cos_min[g].min(refined.normals[i as usize].dot(nf));
                 }
             }
             (cos_min, own)
         })
         .collect();
-    let (cos_min, own): (Vec<f64>, Vec<u32>) = (0..nv)
+    let (cos_min, own): (Vec<f64>, Vec<u32>) = (0..ng)
         .into_par_iter()
-        .map(|i| {
-            parts.iter().fold((1.0f64, u32::MAX), |(c, o), (cm, ow)| {
-                (c.min(cm[i]), if ow[i] == u32::MAX { o } else { ow[i] })
+        .map(|g| {
+            parts.iter().fold((1.0f64, NONE), |(c, o), (cm, ow)| {
+                (c.min(cm[g]), if ow[g] == NONE { o } else { ow[g] })
             })
         })
         .unzip();
     drop(parts);
     let crease = CREASE_DEG.to_radians().cos();
-    let sharp = |i: usize| cos_min[i] < crease || on_rim[i];
+    // Asked of gouged vertices only.
+    let sharp = |i: usize| cos_min[slot[i] as usize] < crease || on_rim[i];
     // A smooth, oriented vertex read as a gouge: asked whether a design face lies nearer
     // to its entry point than the reading (below).
     let asks = |i: usize, s: f64| s < 0.0 && !sharp(i) && !unoriented[i];
@@ -296,7 +312,7 @@ fn crease_depths(
     // sphere_on_plate ball, 2.7 per face: the build 28 M and its queries 22 M instructions
     // against the tree's 51 M).
     let asked = devs
-        .iter()
+        .par_iter()
         .enumerate()
         .filter(|&(i, d)| d.signed_mm.is_some_and(|s| asks(i, s)))
         .count();
@@ -305,7 +321,7 @@ fn crease_depths(
         .flatten();
     let near_design = |i: usize, p: DVec3, r: f64| {
         design
-            .get(own[i] as usize)
+            .get(own[slot[i] as usize] as usize)
             .is_some_and(|t| crate::deviation::distance_to_triangle(p, t) < r)
             || grid
                 .as_ref()
