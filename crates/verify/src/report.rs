@@ -4,6 +4,8 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+use rayon::prelude::*;
+
 use crate::deviation::{Deviation, DeviationConfig};
 use crate::refine::RefineConfig;
 
@@ -184,30 +186,82 @@ fn order_statistics(mut values: Vec<f64>) -> [f64; 6] {
     out
 }
 
-/// The first `want` items of `keyed` in ascending order that `keep` accepts (it sees them
-/// in that order, and is told which it kept), selecting and sorting only as many as
-/// needed: a block of the least remaining items at a time, doubling. `(key, index)` pairs
-/// are all distinct, so the order is the full sort's.
+/// A candidate `(key, index)` ordered by key (`total_cmp`), then index: all distinct.
+#[derive(Clone, Copy, Debug)]
+struct Candidate(f64, usize);
+
+impl Ord for Candidate {
+    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&o.0).then(self.1.cmp(&o.1))
+    }
+}
+
+impl PartialOrd for Candidate {
+    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+impl PartialEq for Candidate {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o).is_eq()
+    }
+}
+
+impl Eq for Candidate {}
+
+/// The first `want` of the items `i < n` with a key (`key(i)`) in ascending `(key, i)`
+/// order that `keep` accepts (it sees them in that order, and is told which it kept): a
+/// block of the least items after those seen at a time, doubling from `block`, each
+/// gathered in one parallel pass without listing the rest. The order is the full sort's.
 fn take_in_order(
-    keyed: &mut [(f64, usize)],
+    n: usize,
+    key: impl Fn(usize) -> Option<f64> + Sync,
     want: usize,
+    block: usize,
     mut keep: impl FnMut(usize) -> bool,
 ) -> usize {
-    let cmp = |a: &(f64, usize), b: &(f64, usize)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
-    let (mut done, mut block, mut kept) = (0, 64, 0);
-    while kept < want && done < keyed.len() {
-        let end = (done + block).min(keyed.len());
-        if end < keyed.len() {
-            keyed[done..].select_nth_unstable_by(end - done - 1, cmp);
-        }
-        keyed[done..end].sort_unstable_by(cmp);
-        for &(_, i) in &keyed[done..end] {
+    use std::collections::BinaryHeap;
+    let (mut after, mut block, mut kept) = (None::<Candidate>, block.max(1), 0);
+    while kept < want {
+        // Max-heaps of at most `block`: the greatest kept on top, to be replaced.
+        let least = (0..n)
+            .into_par_iter()
+            .filter_map(|i| {
+                key(i)
+                    .map(|k| Candidate(k, i))
+                    .filter(|c| after.is_none_or(|a| *c > a))
+            })
+            .fold(BinaryHeap::new, |mut h, c| {
+                if h.len() < block {
+                    h.push(c);
+                } else if h.peek().is_some_and(|top| c < *top) {
+                    h.pop();
+                    h.push(c);
+                }
+                h
+            })
+            .reduce(BinaryHeap::new, |mut a, b| {
+                for c in b {
+                    a.push(c);
+                    if a.len() > block {
+                        a.pop();
+                    }
+                }
+                a
+            })
+            .into_sorted_vec();
+        for &c in &least {
             if kept >= want {
                 break;
             }
-            kept += usize::from(keep(i));
+            kept += usize::from(keep(c.1));
+            after = Some(c);
         }
-        (done, block) = (end, block * 2);
+        if least.len() < block {
+            break;
+        }
+        block *= 2;
     }
     kept
 }
@@ -221,40 +275,9 @@ pub fn build_report(
     settings: Option<MeasureSettings>,
 ) -> VerifyReport {
     let tol = cfg.tolerance_mm;
-    let values: Vec<f64> = devs.iter().filter_map(|d| d.signed_mm).collect();
-    let [least, p01, p50, p95, p99, greatest] = order_statistics(values.clone());
-    let measured = values.len();
-    let mean = if measured > 0 {
-        values.iter().sum::<f64>() / measured as f64
-    } else {
-        0.0
-    };
-    let mut counts = ToleranceCounts {
-        gouge: 0,
-        within: 0,
-        excess: 0,
-    };
-    for &v in &values {
-        if v < -tol {
-            counts.gouge += 1;
-        } else if v > tol {
-            counts.excess += 1;
-        } else {
-            counts.within += 1;
-        }
-    }
-    let edges: Vec<f64> = cfg.band_edges_tol.iter().map(|k| k * tol).collect();
-    let mut bands: Vec<Band> = (0..=edges.len())
-        .map(|b| Band {
-            lo_mm: (b > 0).then(|| edges[b - 1]),
-            hi_mm: edges.get(b).copied(),
-            count: 0,
-        })
-        .collect();
-    for &v in &values {
-        let b = edges.partition_point(|&e| e <= v);
-        bands[b].count += 1;
-    }
+    // The values in vertex order (sums run in that order), and their summary beside the
+    // worst locations.
+    let values: Vec<f64> = devs.par_iter().filter_map(|d| d.signed_mm).collect();
     let locate = |d: &Deviation, kind: Finding| WorstLocation {
         kind,
         position: d.position.to_array(),
@@ -267,18 +290,14 @@ pub fn build_report(
     };
     let worst = |kind: Finding| {
         // Worst first (ties by vertex), each at least the separation from those before.
-        let mut keyed: Vec<(f64, usize)> = devs
-            .iter()
-            .enumerate()
-            .filter_map(|(i, d)| match (kind, d.signed_mm) {
-                (Finding::Gouge, Some(v)) if v < 0.0 => Some((v, i)),
-                (Finding::Excess, Some(v)) if v > 0.0 => Some((-v, i)),
-                _ => None,
-            })
-            .collect();
+        let key = |i: usize| match (kind, devs[i].signed_mm) {
+            (Finding::Gouge, Some(v)) if v < 0.0 => Some(v),
+            (Finding::Excess, Some(v)) if v > 0.0 => Some(-v),
+            _ => None,
+        };
         let mut out: Vec<WorstLocation> = Vec::new();
         let sep2 = cfg.worst_separation_mm * cfg.worst_separation_mm;
-        take_in_order(&mut keyed, cfg.worst_n, |i| {
+        take_in_order(devs.len(), key, cfg.worst_n, 64, |i| {
             let p = devs[i].position;
             let apart = out
                 .iter()
@@ -290,6 +309,45 @@ pub fn build_report(
         });
         out
     };
+    let ((measured, mean, counts, bands, stats), (worst_gouges, worst_excess)) = rayon::join(
+        || {
+            let measured = values.len();
+            let mean = if measured > 0 {
+                values.iter().sum::<f64>() / measured as f64
+            } else {
+                0.0
+            };
+            let mut counts = ToleranceCounts {
+                gouge: 0,
+                within: 0,
+                excess: 0,
+            };
+            for &v in &values {
+                if v < -tol {
+                    counts.gouge += 1;
+                } else if v > tol {
+                    counts.excess += 1;
+                } else {
+                    counts.within += 1;
+                }
+            }
+            let edges: Vec<f64> = cfg.band_edges_tol.iter().map(|k| k * tol).collect();
+            let mut bands: Vec<Band> = (0..=edges.len())
+                .map(|b| Band {
+                    lo_mm: (b > 0).then(|| edges[b - 1]),
+                    hi_mm: edges.get(b).copied(),
+                    count: 0,
+                })
+                .collect();
+            for &v in &values {
+                let b = edges.partition_point(|&e| e <= v);
+                bands[b].count += 1;
+            }
+            (measured, mean, counts, bands, order_statistics(values))
+        },
+        || rayon::join(|| worst(Finding::Gouge), || worst(Finding::Excess)),
+    );
+    let [least, p01, p50, p95, p99, greatest] = stats;
     VerifyReport {
         toolpath: None,
         part: None,
@@ -307,8 +365,8 @@ pub fn build_report(
         p01_mm: p01,
         tolerance_counts: counts,
         bands,
-        worst_gouges: worst(Finding::Gouge),
-        worst_excess: worst(Finding::Excess),
+        worst_gouges,
+        worst_excess,
     }
 }
 
@@ -387,9 +445,10 @@ mod tests {
         /// of the fully sorted pairs, for a `keep` that depends on what it kept before
         /// (as the worst locations' separation does).
         #[test]
-        fn take_in_order_scans_as_the_full_sort(v in values(), want in 0usize..30, gap in 1usize..50) {
-            let mut keyed: Vec<(f64, usize)> = v.iter().copied().zip(0..).collect();
-            let mut sorted = keyed.clone();
+        fn take_in_order_scans_as_the_full_sort(
+            v in values(), want in 0usize..30, gap in 1usize..50, block in 1usize..70,
+        ) {
+            let mut sorted: Vec<(f64, usize)> = v.iter().copied().zip(0..).collect();
             sorted.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             let keep_far = |kept: &mut Vec<usize>, i: usize| {
                 let far = kept.iter().all(|&k: &usize| k.abs_diff(i) >= gap);
@@ -406,7 +465,8 @@ mod tests {
                 keep_far(&mut reference, i);
             }
             let mut got = Vec::new();
-            let n = take_in_order(&mut keyed, want, |i| keep_far(&mut got, i));
+            // Small first blocks: several rounds.
+            let n = take_in_order(v.len(), |i| Some(v[i]), want, block, |i| keep_far(&mut got, i));
             prop_assert_eq!(n, got.len());
             prop_assert_eq!(got, reference);
         }
