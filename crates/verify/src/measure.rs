@@ -1952,7 +1952,7 @@ fn measure_vectors(
                          hi: f64,
                          found: &mut Option<(Entry, u32)>,
                          tests: &mut usize,
-                         listed: &[ColumnListed]| {
+                         listed: &[&ColumnListed]| {
         let tie = column_tie(rr);
         let mut hi = found.map_or(hi, |(e, _)| e.s) - tie;
         let inv = DVec3::new(1.0 / line.n.x, 1.0 / line.n.y, 1.0 / line.n.z);
@@ -2059,9 +2059,9 @@ fn measure_vectors(
     let direct_one = |v: &Vector,
                       seeded: (bool, Option<(Entry, u32)>),
                       among: Option<&[u32]>,
-                      listed: Option<(&[RunListed], &[Listed])>,
-                      pucks_listed: Option<&[PuckListed]>,
-                      columns_listed: Option<&[ColumnListed]>|
+                      listed: Option<(&[&RunListed], &[Listed])>,
+                      pucks_listed: Option<&[&PuckListed]>,
+                      columns_listed: Option<&[&ColumnListed]>|
      -> PerVector {
         let mut stats = [0usize; 5];
         let line = Line {
@@ -2563,9 +2563,11 @@ fn measure_vectors(
                     .map(|tile| {
                         let (mut vols, mut cols, mut pending) =
                             (Vec::new(), Vec::new(), Vec::new());
-                        let mut rlay: Vec<RunListed> = Vec::new();
-                        let mut play: Vec<PuckListed> = Vec::new();
-                        let mut clay: Vec<ColumnListed> = Vec::new();
+                        // The group's laid-out runs, moves and columns (by reference: copies
+                        // of each for every group cost sphere_on_plate's ball program 1 %).
+                        let mut rlay: Vec<&RunListed> = Vec::new();
+                        let mut play: Vec<&PuckListed> = Vec::new();
+                        let mut clay: Vec<&ColumnListed> = Vec::new();
                         // The moves and columns near the tile's vectors, from their starts to
                         // `TILE_REACH_MM` out, gathered once: a group whose box lies within
                         // filters these instead of walking the trees (the same lists).
@@ -2667,14 +2669,14 @@ fn measure_vectors(
                                 },
                             );
                             // A ball's listed runs (their members laid out once for all groups).
-                            let moves = (runs.is_some() && listed.0).then(|| {
-                                rlay.clear();
-                                rlay.extend(
-                                    vols.iter()
-                                        .map(|&ci| run_lay[run_tree.items[ci as usize].1 as usize]),
-                                );
-                                (&rlay[..], &member_lay[..])
-                            });
+                            let moves =
+                                (runs.is_some() && listed.0).then(|| {
+                                    rlay.clear();
+                                    rlay.extend(vols.iter().map(|&ci| {
+                                        &run_lay[run_tree.items[ci as usize].1 as usize]
+                                    }));
+                                    (&rlay[..], &member_lay[..])
+                                });
                             // The listed columns, likewise. Every move of a program searched
                             // here keeps its axis; were one not to, the group's vectors would
                             // walk the column tree instead.
@@ -2683,7 +2685,8 @@ fn measure_vectors(
                                 .then(|| {
                                     clay.clear();
                                     clay.extend(
-                                        cols.iter().map_while(|&ci| column_lay[ci as usize]),
+                                        cols.iter()
+                                            .map_while(|&ci| column_lay[ci as usize].as_ref()),
                                     );
                                     &clay[..]
                                 })
@@ -2691,7 +2694,7 @@ fn measure_vectors(
                             // A bull's, likewise.
                             let bull_moves = (bull && listed.0).then(|| {
                                 play.clear();
-                                play.extend(vols.iter().map(|&ci| puck_lay[ci as usize]));
+                                play.extend(vols.iter().map(|&ci| &puck_lay[ci as usize]));
                                 &play[..]
                             });
                             for &(i, b) in &pending {
