@@ -475,7 +475,7 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
         match refined {
             Ok((pos, tris, src)) => {
                 let (positions, normals, triangles) =
-                    vertex_normals(mesh, pos, tris, &src, cfg.crease_angle_deg);
+                    vertex_normals(mesh, &welded_tris, pos, tris, &src, cfg.crease_angle_deg);
                 return Ok(RefinedMesh {
                     positions,
                     normals,
@@ -731,9 +731,14 @@ const HEMISPHERE_COS: f64 = 0.017_452_406_437_283_5;
 /// Most vertices lie inside one design face (a remeshed face's lattice, a bisection's
 /// midpoint): every face around them has that face's normal, which is theirs. Only the
 /// vertices whose faces come from several design faces (on the design's edges and corners)
-/// are averaged, over their corners listed in face order.
+/// are averaged, over the design faces around them. A design face's weight is its angle at
+/// the vertex, which its refined faces there divide among them: its corner's angle where the
+/// vertex is one of its corners (`design`: the design faces' corners, numbered as the first
+/// points of `pos`), else π (a point of one of its edges). The same sum as over the refined
+/// corners' angles, but for their rounding.
 fn vertex_normals(
     mesh: &Mesh,
+    design: &[[u32; 3]],
     pos: Vec<DVec3>,
     tris: Vec<[u32; 3]>,
     src: &[u32],
@@ -794,14 +799,17 @@ fn vertex_normals(
         }
     }
     drop(fill);
-    let angle = |f: u32, k: u8| {
-        let t = tris[f as usize];
-        let k = k as usize;
-        corner_angle(
-            pos[t[k] as usize],
-            pos[t[(k + 1) % 3] as usize],
-            pos[t[(k + 2) % 3] as usize],
-        )
+    // Design face `d`'s angle at vertex `v` (see above).
+    let angle = |d: u32, v: u32| {
+        let t = design[d as usize];
+        match t.iter().position(|&x| x == v) {
+            Some(j) => corner_angle(
+                pos[t[j] as usize],
+                pos[t[(j + 1) % 3] as usize],
+                pos[t[(j + 2) % 3] as usize],
+            ),
+            None => std::f64::consts::PI,
+        }
     };
     // Per mixed vertex, in parallel over blocks of them: its distinct normals in the order
     // of its corners (`normals`, `count` per vertex) and each corner's index among them
@@ -822,9 +830,9 @@ fn vertex_normals(
         .with_max_len(1)
         .map(|(b, e, slot)| {
             let (mut normals, mut count) = (Vec::new(), Vec::with_capacity(e - b));
-            // Each corner's angle, computed once per vertex (not once per pair of corners).
+            // The design faces around a vertex (ascending) and their angles there.
+            let mut faces: Vec<u32> = Vec::new();
             let mut angles: Vec<f64> = Vec::new();
-            let mut order: Vec<usize> = Vec::new();
             let base = start[b] as usize;
             for m in b..e {
                 let (c0, c1) = (start[m] as usize, start[m + 1] as usize);
@@ -839,24 +847,25 @@ fn vertex_normals(
                     slot.fill(0);
                     continue;
                 }
+                // Summed by design face in ascending order, whatever order the faces
+                // around the vertex are listed in (a region leaving out points far from
+                // it lists others): the same bits.
+                faces.clear();
+                faces.extend(cs.iter().map(|&(f, _)| src[f as usize]));
+                faces.sort_unstable();
+                faces.dedup();
                 angles.clear();
-                angles.extend(cs.iter().map(|&(g, j)| angle(g, j)));
-                // Summed in an order of their own (by design face, then angle), not the
-                // faces' order, so that the same faces around the vertex, listed in
-                // another order (a region leaving out points far from it), give the same
-                // bits.
-                order.clear();
-                order.extend(0..cs.len());
-                order.sort_unstable_by_key(|&i| (src[cs[i].0 as usize], angles[i].to_bits()));
+                angles.extend(faces.iter().map(|&d| angle(d, mixed[m])));
+                let dn = |d: u32| design_n[d as usize];
                 // Averaging across every crease (180°, as the verifier does) and every face
                 // within 89° of the first, so any two within 178°: every corner's sum takes
                 // every face, in the same order, and is the same. Summed once.
                 if cos_crease <= ALL_FACES_COS
-                    && cs.iter().all(|&(g, _)| face_n(g).dot(n0) >= HEMISPHERE_COS)
+                    && faces.iter().all(|&d| dn(d).dot(n0) >= HEMISPHERE_COS)
                 {
                     let mut sum = DVec3::ZERO;
-                    for &i in &order {
-                        sum += angles[i] * face_n(cs[i].0);
+                    for (&d, &a) in faces.iter().zip(&angles) {
+                        sum += a * dn(d);
                     }
                     normals.push(sum.try_normalize().unwrap_or(n0));
                     count.push(1);
@@ -866,10 +875,10 @@ fn vertex_normals(
                 for (i, &(f, _)) in cs.iter().enumerate() {
                     let nf = face_n(f);
                     let mut sum = DVec3::ZERO;
-                    for &i in &order {
-                        let ng = face_n(cs[i].0);
+                    for (&d, &a) in faces.iter().zip(&angles) {
+                        let ng = dn(d);
                         if ng.dot(nf) >= cos_crease {
-                            sum += angles[i] * ng;
+                            sum += a * ng;
                         }
                     }
                     let n = sum.try_normalize().unwrap_or(nf);
@@ -1083,8 +1092,9 @@ mod tests {
         let shifted: Vec<[u32; 3]> = faces.iter().map(|t| t.map(|v| v + 1)).collect();
         let src = [0u32, 1];
         for deg in [180.0, 30.0] {
-            let (p0, n0, t0) = vertex_normals(&m, pos.clone(), faces.clone(), &src, deg);
-            let (p1, n1, t1) = vertex_normals(&m, with.clone(), shifted.clone(), &src, deg);
+            let (p0, n0, t0) = vertex_normals(&m, &faces, pos.clone(), faces.clone(), &src, deg);
+            let (p1, n1, t1) =
+                vertex_normals(&m, &shifted, with.clone(), shifted.clone(), &src, deg);
             assert_eq!((p0.len(), n0.len()), (p1.len(), n1.len()), "{deg}°");
             assert!(!p1.contains(&DVec3::splat(7.0)), "{deg}°");
             for (a, b) in t0.iter().zip(&t1) {
@@ -1095,7 +1105,7 @@ mod tests {
             }
         }
         // At 30° the fold's two vertices on the crease are duplicated: 4 + 2.
-        let (p, _, _) = vertex_normals(&m, with, shifted, &src, 30.0);
+        let (p, _, _) = vertex_normals(&m, &shifted, with, shifted.clone(), &src, 30.0);
         assert_eq!(p.len(), 6);
     }
 
@@ -1157,7 +1167,7 @@ mod tests {
         for deg in [180.0f64, 179.85, 30.0] {
             let cos = deg.to_radians().cos();
             let (out_pos, out_n, out_tris) =
-                vertex_normals(&m, pos.clone(), faces.clone(), &src, deg);
+                vertex_normals(&m, &faces, pos.clone(), faces.clone(), &src, deg);
             for (fi, t) in faces.iter().enumerate() {
                 for k in 0..3 {
                     let v = t[k];
