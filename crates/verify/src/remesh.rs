@@ -69,10 +69,20 @@ enum Local {
     Lattice(u32),
 }
 
-/// One face's remesh: its lattice points and triangles.
+/// One face's remesh: its lattice points, its boundary points (global indices) and its
+/// triangles, whose corners are numbered locally: boundary points first, then the lattice
+/// (half the bytes of [`Local`]s, which the assembly waits on).
 struct FaceMesh {
     lattice: Vec<DVec3>,
-    tris: Vec<[Local; 3]>,
+    ids: Vec<u32>,
+    tris: Vec<[u32; 3]>,
+}
+
+impl FaceMesh {
+    /// Local corner `i`.
+    fn local(&self, i: u32) -> Local {
+        local(&self.ids, i as usize)
+    }
 }
 
 /// Remeshes the faces `tris0` (on `pos0`) that meet `region` (all without one) and whose
@@ -233,7 +243,7 @@ pub(crate) fn remesh(
             Some(fm) => {
                 p.copy_from_slice(&fm.lattice);
                 for (out, lt) in t.iter_mut().zip(&fm.tris) {
-                    *out = lt.map(|l| match l {
+                    *out = lt.map(|l| match fm.local(l) {
                         Local::Global(g) => g,
                         Local::Lattice(i) => base + i,
                     });
@@ -295,17 +305,13 @@ fn fan(pos0: &[DVec3], divided: &IntMap<u64, (u32, u32)>, t: &[u32; 3]) -> FaceM
     let ids = boundary(divided, t);
     let centroid = t.iter().map(|&i| pos0[i as usize]).sum::<DVec3>() / 3.0;
     let n = ids.len();
+    let tris = (0..n)
+        .map(|i| [i as u32, ((i + 1) % n) as u32, n as u32])
+        .collect();
     FaceMesh {
         lattice: vec![centroid],
-        tris: (0..n)
-            .map(|i| {
-                [
-                    Local::Global(ids[i]),
-                    Local::Global(ids[(i + 1) % n]),
-                    Local::Lattice(0),
-                ]
-            })
-            .collect(),
+        ids,
+        tris,
     }
 }
 
@@ -630,15 +636,12 @@ fn face_mesh_own(
             }
         }
     }
-    let tris: Vec<[Local; 3]> = cdt
-        .triangles()
-        .iter()
-        .map(|v| v.map(|i| local(&ids, i as usize)))
-        .collect();
+    // Numbered as the triangulation numbers its points: the boundary's, then the lattice's.
+    let tris = cdt.triangles().to_vec();
     if tris.len() != nb + 2 * lattice.len() - 2 || cdt.num_points() != nb + lattice.len() {
         return None;
     }
-    Some(FaceMesh { lattice, tris })
+    Some(FaceMesh { lattice, ids, tris })
 }
 
 /// [`face_mesh`] by spade's constrained Delaunay triangulation.
@@ -733,17 +736,18 @@ fn face_mesh_spade(
             }
         }
     }
-    let tris: Vec<[Local; 3]> = cdt
+    // Spade numbers its points as inserted: the boundary's, then the lattice's.
+    let tris: Vec<[u32; 3]> = cdt
         .inner_faces()
         .filter(|f| !outside[f.fix().index()])
-        .map(|f| f.vertices().map(|v| local(&ids, v.fix().index())))
+        .map(|f| f.vertices().map(|v| v.fix().index() as u32))
         .collect();
     // A triangulation of a polygon with `nb` boundary and `l` inner points has nb + 2l − 2
     // triangles.
     if tris.len() != nb + 2 * lattice.len() - 2 {
         return None;
     }
-    Some(FaceMesh { lattice, tris })
+    Some(FaceMesh { lattice, ids, tris })
 }
 
 #[cfg(test)]
@@ -778,7 +782,7 @@ mod tests {
         };
         let mut area = 0.0;
         for tri in &fm.tris {
-            let [a, b, c] = tri.map(at);
+            let [a, b, c] = tri.map(|l| at(fm.local(l)));
             let cr = (b - a).cross(c - a);
             assert!(cr.dot(n) > 0.0, "a fan triangle is flipped or flat");
             area += 0.5 * cr.length();
@@ -874,7 +878,7 @@ mod tests {
                     .tris
                     .iter()
                     .map(|tri| {
-                        let mut v = tri.map(|l| at(l).to_array().map(f64::to_bits));
+                        let mut v = tri.map(|l| at(fm.local(l)).to_array().map(f64::to_bits));
                         let r = (0..3).min_by_key(|&k| v[k]).unwrap();
                         v.rotate_left(r);
                         v
