@@ -159,6 +159,7 @@ fn clip_to_material(
     m: &measure::Measurement,
 ) -> (material::InnerLengths, Vec<(usize, f64)>) {
     let gouges: Vec<usize> = (0..refined.len())
+        .into_par_iter()
         .filter(|&i| {
             m.deviations[i]
                 .signed_mm
@@ -612,10 +613,13 @@ pub fn verify_with_progress(
     let refined = refined?;
     // Refined vertices on a face next to a misoriented or non-manifold edge.
     let mut unoriented = vec![false; refined.len()];
-    for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
-        if unoriented_tris[src as usize] {
-            for &i in t {
-                unoriented[i as usize] = true;
+    // (None on a well-joined design: the faces are not walked.)
+    if unoriented_tris.contains(&true) {
+        for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
+            if unoriented_tris[src as usize] {
+                for &i in t {
+                    unoriented[i as usize] = true;
+                }
             }
         }
     }
