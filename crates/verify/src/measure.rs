@@ -1588,18 +1588,8 @@ pub fn measure_with(
     surface: SurfaceModel,
     locator: Locator,
 ) -> Result<Measurement, DeviationError> {
-    measure_inner(
-        refined,
-        Inner::All(cfg.inside_mm),
-        models,
-        toolpath,
-        cfg,
-        surface,
-        locator,
-        None,
-        None,
-        None,
-    )
+    let inner = vec![cfg.inside_mm; refined.positions.len()];
+    measure_with_inner(refined, &inner, models, toolpath, cfg, surface, locator)
 }
 
 /// [`measure_with`] with each vector's inner length `L_in(v)` given per vertex (mm, in
