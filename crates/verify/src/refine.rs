@@ -1109,15 +1109,9 @@ mod tests {
         assert_eq!(p.len(), 6);
     }
 
-    /// The vertex normals against the definition, corner by corner: each corner's normal is
-    /// the angle-weighted sum of the normals of the vertex's faces within the crease angle
-    /// of its own face, in face order, normalised (their one normal where they share it). Across every crease (180°, where one sum
-    /// serves every corner of a vertex whose faces lie within 89° of the first), and at
-    /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
-    /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
-    /// used).
-    #[test]
-    fn vertex_normals_equal_the_corner_by_corner_definition() {
+    /// A faceted dome (gentle creases), a box corner (90° folds), a fin whose faces fold
+    /// back 179.9° and a ridge (60°), apart.
+    fn normals_design() -> Vec<Triangle> {
         let mut tris = Vec::new();
         // A faceted dome: 8 × 4 quads on a sphere of radius 10.
         let at = |i: usize, j: usize| {
@@ -1156,7 +1150,19 @@ mod tests {
             g + DVec3::new(0.0, -c30, -s30),
             g + DVec3::X,
         ));
-        let m = mesh(tris);
+        tris
+    }
+
+    /// The vertex normals against the definition, corner by corner: each corner's normal is
+    /// the angle-weighted sum of the normals of the vertex's faces within the crease angle
+    /// of its own face, in face order, normalised (their one normal where they share it). Across every crease (180°, where one sum
+    /// serves every corner of a vertex whose faces lie within 89° of the first), and at
+    /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
+    /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
+    /// used).
+    #[test]
+    fn vertex_normals_equal_the_corner_by_corner_definition() {
+        let m = mesh(normals_design());
         let (pos, faces) = weld(&m);
         let src: Vec<u32> = (0..faces.len() as u32).collect();
         let fn_: Vec<DVec3> = m
@@ -1201,6 +1207,70 @@ mod tests {
                     assert_eq!(out_n[got], want, "{deg}°: face {fi} corner {k}");
                 }
             }
+        }
+    }
+    /// On a refined mesh, where design edges and corners hold points of several refined
+    /// faces of each design face, every corner's normal is the sum over the refined corners
+    /// around its vertex (their angles, their design faces' normals, those within the crease
+    /// angle of its own face's), normalised: weighting each design face once by its angle
+    /// (π along an edge, its corner's at a corner) differs from it only by rounding; on
+    /// [`normals_design`], at 180° and 30°. (Along an edge every face weighs π, so only the
+    /// corners' weights can tell a wrong one.)
+    #[test]
+    fn refined_vertex_normals_equal_the_sum_over_refined_corners() {
+        let design = mesh(normals_design());
+        let fn_: Vec<DVec3> = design
+            .triangles()
+            .iter()
+            .map(|t| t.normal().unwrap_or(DVec3::Z))
+            .collect();
+        for deg in [180.0f64, 30.0] {
+            let cfg = RefineConfig {
+                max_edge_mm: 0.3,
+                crease_angle_deg: deg,
+                max_vertices: None,
+                on_cap: CapPolicy::Error,
+                region: None,
+                remesh: true,
+            };
+            let r = refine(&design, &cfg).unwrap();
+            let cos = deg.to_radians().cos();
+            // The refined corners around each position (copies on creases are one point).
+            let mut around: HashMap<[u64; 3], Vec<(usize, usize)>> = HashMap::new();
+            for (f, t) in r.triangles.iter().enumerate() {
+                for (k, &v) in t.iter().enumerate() {
+                    let key = r.positions[v as usize].to_array().map(f64::to_bits);
+                    around.entry(key).or_default().push((f, k));
+                }
+            }
+            let (mut edge_points, mut checked) = (0, 0);
+            for corners in around.values() {
+                let srcs: Vec<u32> = corners.iter().map(|&(f, _)| r.face_source[f]).collect();
+                if srcs
+                    .iter()
+                    .all(|&d| fn_[d as usize] == fn_[srcs[0] as usize])
+                {
+                    continue;
+                }
+                let p = r.positions[r.triangles[corners[0].0][corners[0].1] as usize];
+                edge_points += usize::from(design.triangles().iter().all(|t| !t.v.contains(&p)));
+                for &(f, k) in corners {
+                    let nf = fn_[r.face_source[f] as usize];
+                    let mut sum = DVec3::ZERO;
+                    for &(g, j) in corners {
+                        let ng = fn_[r.face_source[g] as usize];
+                        if ng.dot(nf) >= cos {
+                            let u = r.triangles[g].map(|x| r.positions[x as usize]);
+                            sum += corner_angle(u[j], u[(j + 1) % 3], u[(j + 2) % 3]) * ng;
+                        }
+                    }
+                    let want = sum.normalize();
+                    let got = r.normals[r.triangles[f][k] as usize];
+                    assert!(got.distance(want) < 1e-12, "{deg}°: {got} against {want}");
+                    checked += 1;
+                }
+            }
+            assert!(edge_points > 50 && checked > 500, "{edge_points} {checked}");
         }
     }
 }
