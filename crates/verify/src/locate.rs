@@ -1149,7 +1149,7 @@ pub fn locate(
     delta: f64,
     margin: f64,
 ) -> Vec<Found> {
-    let codes = morton_codes(&vectors.iter().map(|v| v.o).collect::<Vec<_>>());
+    let codes = morton_codes_by(vectors, |v| v.o);
     let mut keyed: Vec<(u64, u32)> = codes
         .into_iter()
         .enumerate()

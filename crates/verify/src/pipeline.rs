@@ -613,7 +613,7 @@ pub fn verify_with_progress(
     let refined = refined?;
     // Refined vertices on a face next to a misoriented or non-manifold edge.
     let mut unoriented = vec![false; refined.len()];
-    // (None on a well-joined design: the faces are not walked.)
+    // Walked only when some design face has such an edge.
     if unoriented_tris.contains(&true) {
         for (t, &src) in refined.triangles.iter().zip(&refined.face_source) {
             if unoriented_tris[src as usize] {

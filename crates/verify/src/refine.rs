@@ -583,33 +583,44 @@ fn split_edges(
         let k = longest_edge(pos, t);
         (pos[t[k] as usize].distance_squared(pos[t[(k + 1) % 3] as usize]) > s2).then_some(k)
     };
-    // The first round's faces (the remesh's: hundreds of thousands, nearly all final) are
-    // classified in parallel and the final ones kept where they are, in order; the faces
-    // the rounds make are few.
-    let first: Vec<(usize, usize, bool)> = tris
-        .par_iter()
-        .zip(&src)
-        .enumerate()
-        .filter_map(|(i, (t, &sidx))| long(&pos, t).map(|k| (i, k, inside(&pos, t, sidx))))
-        .collect();
-    let mut active = Vec::new();
-    let mut active_src = Vec::new();
-    let mut longest = Vec::new();
+    // Splits a round's faces (the first round's are the remesh's: hundreds of thousands,
+    // nearly all final) in parallel: the final ones kept in order, in place, and the long
+    // ones `(face, source, longest edge, inside the region)` taken out in order.
+    let classify = |mut tris: Vec<[u32; 3]>, mut src: Vec<u32>, pos: &[DVec3]| {
+        let out: Vec<(usize, usize, bool)> = tris
+            .par_iter()
+            .zip(&src)
+            .enumerate()
+            .filter_map(|(i, (t, &sidx))| long(pos, t).map(|k| (i, k, inside(pos, t, sidx))))
+            .collect();
+        let taken: Vec<([u32; 3], u32, usize, bool)> = out
+            .iter()
+            .map(|&(i, k, ins)| (tris[i], src[i], k, ins))
+            .collect();
+        remove_at(&mut tris, out.iter().map(|f| f.0));
+        remove_at(&mut src, out.iter().map(|f| f.0));
+        (tris, src, taken)
+    };
+    let (mut done, mut done_src) = (Vec::new(), Vec::new());
     let mut dormant: Vec<([u32; 3], u32, usize)> = Vec::new();
-    for &(i, k, ins) in &first {
-        if ins {
-            active.push(tris[i]);
-            active_src.push(src[i]);
-            longest.push(k);
-        } else {
-            dormant.push((tris[i], src[i], k));
-        }
-    }
-    remove_at(&mut tris, first.iter().map(|f| f.0));
-    remove_at(&mut src, first.iter().map(|f| f.0));
-    drop(first);
-    let (mut done, mut done_src) = (tris, src);
     loop {
+        let (fin, fin_src, taken) = classify(tris, src, &pos);
+        if done.is_empty() {
+            (done, done_src) = (fin, fin_src);
+        } else {
+            done.extend(fin);
+            done_src.extend(fin_src);
+        }
+        let (mut active, mut active_src, mut longest) = (Vec::new(), Vec::new(), Vec::new());
+        for (t, sidx, k, ins) in taken {
+            if ins {
+                active.push(t);
+                active_src.push(sidx);
+                longest.push(k);
+            } else {
+                dormant.push((t, sidx, k));
+            }
+        }
         if active.is_empty() {
             for (t, sidx, _) in dormant {
                 done.push(t);
@@ -695,22 +706,8 @@ fn split_edges(
             }
             ns.extend(std::iter::repeat_n(sidx, nt.len() - before));
         }
-        // The next round's faces: final, active or dormant.
-        (active, active_src, longest) = (Vec::new(), Vec::new(), Vec::new());
-        for (t, sidx) in nt.into_iter().zip(ns) {
-            match long(&pos, &t) {
-                None => {
-                    done.push(t);
-                    done_src.push(sidx);
-                }
-                Some(k) if inside(&pos, &t, sidx) => {
-                    active.push(t);
-                    active_src.push(sidx);
-                    longest.push(k);
-                }
-                Some(k) => dormant.push((t, sidx, k)),
-            }
-        }
+        tris = nt;
+        src = ns;
     }
 }
 

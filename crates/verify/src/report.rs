@@ -186,29 +186,11 @@ fn order_statistics(mut values: Vec<f64>) -> [f64; 6] {
     out
 }
 
-/// A candidate `(key, index)` ordered by key (`total_cmp`), then index: all distinct.
-#[derive(Clone, Copy, Debug)]
-struct Candidate(f64, usize);
-
-impl Ord for Candidate {
-    fn cmp(&self, o: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&o.0).then(self.1.cmp(&o.1))
-    }
+/// An integer that orders as `x` does under `f64::total_cmp` (its own definition).
+fn total_key(x: f64) -> i64 {
+    let b = x.to_bits() as i64;
+    b ^ (((b >> 63) as u64) >> 1) as i64
 }
-
-impl PartialOrd for Candidate {
-    fn partial_cmp(&self, o: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(o))
-    }
-}
-
-impl PartialEq for Candidate {
-    fn eq(&self, o: &Self) -> bool {
-        self.cmp(o).is_eq()
-    }
-}
-
-impl Eq for Candidate {}
 
 /// The first `want` of the items `i < n` with a key (`key(i)`) in ascending `(key, i)`
 /// order that `keep` accepts (it sees them in that order, and is told which it kept): a
@@ -222,14 +204,15 @@ fn take_in_order(
     mut keep: impl FnMut(usize) -> bool,
 ) -> usize {
     use std::collections::BinaryHeap;
-    let (mut after, mut block, mut kept) = (None::<Candidate>, block.max(1), 0);
+    // Candidates `(key, index)`, all distinct.
+    let (mut after, mut block, mut kept) = (None::<(i64, usize)>, block.max(1), 0);
     while kept < want {
         // Max-heaps of at most `block`: the greatest kept on top, to be replaced.
         let least = (0..n)
             .into_par_iter()
             .filter_map(|i| {
                 key(i)
-                    .map(|k| Candidate(k, i))
+                    .map(|k| (total_key(k), i))
                     .filter(|c| after.is_none_or(|a| *c > a))
             })
             .fold(BinaryHeap::new, |mut h, c| {
