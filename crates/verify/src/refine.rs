@@ -1152,11 +1152,10 @@ mod tests {
 
     /// The vertex normals against the definition, corner by corner: each corner's normal is
     /// the angle-weighted sum of the normals of the vertex's faces within the crease angle
-    /// of its own face, in face order, normalised (their one normal where they share it). Across every crease (180°, where one sum
-    /// serves every corner of a vertex whose faces lie within 89° of the first), and at
-    /// 179.85° and 30°, on a faceted dome (gentle creases), a ridge (60°), a box corner (90°
-    /// folds) and a fin whose faces fold back 179.9° (a crease at 179.85°, where the one sum must not be
-    /// used).
+    /// of its own face, in face order, normalised (their one normal where they share it).
+    /// Across every crease (180°, where one sum serves every corner of a vertex whose faces
+    /// lie within 89° of the first), and at 179.85° (the fin's fold, where the one sum must
+    /// not be used) and 30°, on [`normals_design`].
     #[test]
     fn vertex_normals_equal_the_corner_by_corner_definition() {
         let m = mesh(normals_design());
@@ -1206,6 +1205,7 @@ mod tests {
             }
         }
     }
+
     /// On a refined mesh, where design edges and corners hold points of several refined
     /// faces of each design face, every corner's normal is the sum over the refined corners
     /// around its vertex (their angles, their design faces' normals, those within the crease
