@@ -629,7 +629,7 @@ impl ColumnListed {
 
 /// A ball's moves in runs ([`crate::chains`]): the tiles and groups gather the runs, whose
 /// chords' capsules hold their members'. The runs, their tree (items `(PUCK, run, chord's
-/// ends)` boxed by the chord grown by `r + slack`), and, laid out once for every group that
+/// ends)` boxed by their members' boxes together), and, laid out once for every group that
 /// lists them, each run (by its index) and its members (in the order of `Runs::members`).
 struct BallRuns {
     runs: crate::chains::Runs,
@@ -647,14 +647,25 @@ impl BallRuns {
                 .map(|(ci, &(_, mv, c0, c1))| (mv, ci, c0, c1))
                 .collect(),
         );
-        let pad = 1e-9 * (1.0 + rr);
+        // A run's box: its members' boxes together (each its centres' box grown by `rr` and a
+        // hair), tighter than its chord's grown by `rr + slack`: most of all at the bottom,
+        // where a vector that starts on the floor of a pass (pointing away from it, on the
+        // underside of a fold) meets every box that reaches below the pass by the slack.
         let (items, bounds) = runs
             .chords
             .iter()
+            .zip(&runs.ranges)
             .enumerate()
-            .map(|(k, &(a, b, slack))| {
-                let e = DVec3::splat(rr + slack + pad);
-                ((PUCK, k as u32, a, b), (a.min(b) - e, a.max(b) + e))
+            .map(|(k, (&(a, b, _), &(first, count)))| {
+                let members = &runs.members[first as usize..(first + count) as usize];
+                let (lo, hi) = members.iter().fold(
+                    (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                    |(lo, hi), &m| {
+                        let (bl, bh) = volumes.bounds[m as usize];
+                        (lo.min(bl), hi.max(bh))
+                    },
+                );
+                ((PUCK, k as u32, a, b), (lo, hi))
             })
             .unzip();
         let tree = Extras::from_items(items, bounds, 0.0);
