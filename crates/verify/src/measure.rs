@@ -2694,7 +2694,8 @@ fn measure_vectors(
                                         columns.gather(lo, hi, 0.0, DIRECT_COLUMNS, &mut cols)
                                     },
                                 );
-                                // A ball's listed runs (their members laid out once for all groups).
+                                // A ball's listed runs (their members laid out once for all
+                                // groups).
                                 let moves = (runs.is_some() && listed.0).then(|| {
                                     rlay.clear();
                                     rlay.extend(vols.iter().map(|&ci| {
