@@ -601,6 +601,48 @@ impl TriangleBvh {
     }
 }
 
+impl TriangleBvh {
+    /// Whether the segment `origin + t·dir`, `t ∈ [t0, t1]`, crosses any triangle: the same
+    /// answer as `lowest_hit(origin, dir, t0, t1, |_| true).is_some()`, ending at the
+    /// first crossing found (boxes in the tree's order, none pruned by a best).
+    pub fn any_hit(&self, origin: DVec3, dir: DVec3, t0: f64, t1: f64) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        let inv = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
+        let meets = |ni: u32| {
+            let m = &self.nodes[ni as usize];
+            slab_entry(origin, inv, m.min, m.max, t0, t1).is_some()
+        };
+        if !meets(0) {
+            return false;
+        }
+        let mut stack = [0u32; 64];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let n = self.nodes[stack[top] as usize];
+            if n.count > 0 {
+                let tris = &self.tris[n.first as usize..(n.first + n.count) as usize];
+                if tris
+                    .iter()
+                    .any(|t| intersect(t, origin, dir, t0, t1).is_some())
+                {
+                    return true;
+                }
+            } else {
+                for c in [n.first, n.first + 1] {
+                    if meets(c) {
+                        stack[top] = c;
+                        top += 1;
+                    }
+                }
+            }
+        }
+        false
+    }
+}
+
 /// Entry parameter of the segment into the box, or `None` if it misses (boundary included).
 #[inline]
 fn slab_entry(o: DVec3, inv: DVec3, min: DVec3, max: DVec3, t0: f64, t1: f64) -> Option<f64> {
@@ -925,5 +967,77 @@ mod tests {
             let want = slab_entry_loop(o, inv, min, max, t0, t0 + len);
             prop_assert_eq!(got.map(f64::to_bits), want.map(f64::to_bits));
         }
+    }
+
+    /// A folded, wavy sheet of triangles over `[-5, 5]²` (two layers, the upper one
+    /// overhanging the lower), for ray casts.
+    fn folded_sheet() -> Vec<Triangle> {
+        let at = |x: f64, y: f64, layer: f64| {
+            DVec3::new(
+                x,
+                y,
+                (0.7 * x).sin() * (0.5 * y).cos() + layer * (2.0 + 0.3 * x),
+            )
+        };
+        let mut tris = Vec::new();
+        for layer in [0.0, 1.0] {
+            for i in 0..20 {
+                for j in 0..20 {
+                    let (x0, y0) = (-5.0 + 0.5 * i as f64, -5.0 + 0.5 * j as f64);
+                    let (x1, y1) = (x0 + 0.5, y0 + 0.5);
+                    let (a, b, c, d) = (
+                        at(x0, y0, layer),
+                        at(x1, y0, layer),
+                        at(x1, y1, layer),
+                        at(x0, y1, layer),
+                    );
+                    tris.push(Triangle::new(a, b, c));
+                    tris.push(Triangle::new(a, c, d));
+                }
+            }
+        }
+        tris
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2_000))]
+
+        /// `any_hit` answers as `lowest_hit` with every crossing accepted, and both as the
+        /// brute force over every triangle: for vertical rays (the material check's sky
+        /// rays) and any other direction, from below, between and above the layers.
+        #[test]
+        fn any_hit_equals_the_lowest_hit_and_brute_force(
+            o in (-6.0..6.0f64, -6.0..6.0f64, -3.0..6.0f64),
+            d in (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+            vertical in any::<bool>(),
+            t0 in 0.0..1.0f64,
+            len in 0.0..12.0f64,
+        ) {
+            let tris = folded_sheet();
+            let bvh = TriangleBvh::new(&tris);
+            let o = DVec3::new(o.0, o.1, o.2);
+            let d = if vertical { DVec3::Z } else { DVec3::new(d.0, d.1, d.2) };
+            prop_assume!(d.length() > 0.1);
+            let d = d.normalize();
+            let t1 = t0 + len;
+            let brute = tris.iter().any(|t| intersect(t, o, d, t0, t1).is_some());
+            prop_assert_eq!(bvh.any_hit(o, d, t0, t1), brute);
+            prop_assert_eq!(bvh.lowest_hit(o, d, t0, t1, |_| true).is_some(), brute);
+        }
+    }
+
+    /// The sheet's sky: a vertical ray from under both layers meets them, one from above
+    /// them or beside the sheet meets nothing.
+    #[test]
+    fn any_hit_sees_the_layers_above() {
+        let bvh = TriangleBvh::new(&folded_sheet());
+        assert!(bvh.any_hit(DVec3::new(0.3, -1.2, -4.0), DVec3::Z, 0.0, 20.0));
+        assert!(!bvh.any_hit(DVec3::new(0.3, -1.2, 6.0), DVec3::Z, 0.0, 20.0));
+        assert!(!bvh.any_hit(DVec3::new(5.5, 0.0, -4.0), DVec3::Z, 0.0, 20.0));
+        // Between the layers: the upper one only.
+        let mid = DVec3::new(0.3, -1.2, 1.0);
+        assert!(bvh.any_hit(mid, DVec3::Z, 0.0, 20.0));
+        assert!(bvh.any_hit(mid, -DVec3::Z, 0.0, 20.0));
+        assert!(!bvh.any_hit(mid, DVec3::Z, 0.0, 0.1));
     }
 }

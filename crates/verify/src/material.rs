@@ -98,11 +98,7 @@ pub fn inner_lengths_at(
             // The inner segment up to its start crosses no face, so it lies on one side of
             // the surface throughout (short of passing under an open rim): where its start
             // has no face above it, neither has the rest: sky.
-            if open_sky
-                && bvh
-                    .lowest_hit(p - len * n, DVec3::Z, 0.0, reach_mm, |_| true)
-                    .is_none()
-            {
+            if open_sky && !bvh.any_hit(p - len * n, DVec3::Z, 0.0, reach_mm) {
                 (0.0, 2)
             } else {
                 (len, kind)
