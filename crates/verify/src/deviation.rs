@@ -599,9 +599,7 @@ impl TriangleBvh {
         }
         best
     }
-}
 
-impl TriangleBvh {
     /// Whether the segment `origin + t·dir`, `t ∈ [t0, t1]`, crosses any triangle: the same
     /// answer as `lowest_hit(origin, dir, t0, t1, |_| true).is_some()`, ending at the
     /// first crossing found (boxes in the tree's order, none pruned by a best).
@@ -1034,7 +1032,8 @@ mod tests {
         assert!(bvh.any_hit(DVec3::new(0.3, -1.2, -4.0), DVec3::Z, 0.0, 20.0));
         assert!(!bvh.any_hit(DVec3::new(0.3, -1.2, 6.0), DVec3::Z, 0.0, 20.0));
         assert!(!bvh.any_hit(DVec3::new(5.5, 0.0, -4.0), DVec3::Z, 0.0, 20.0));
-        // Between the layers: the upper one only.
+        // Between the layers: the upper one above, the lower one below, and neither within
+        // 0.1 mm above.
         let mid = DVec3::new(0.3, -1.2, 1.0);
         assert!(bvh.any_hit(mid, DVec3::Z, 0.0, 20.0));
         assert!(bvh.any_hit(mid, -DVec3::Z, 0.0, 20.0));

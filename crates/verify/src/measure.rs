@@ -2646,7 +2646,7 @@ fn measure_vectors(
                                     None => unseeded.push((i, (tried, None))),
                                 }
                             }
-                            for (k, set) in [&unseeded, &pending].into_iter().enumerate() {
+                            for (set, together) in [(&unseeded, true), (&pending, false)] {
                                 if set.is_empty() {
                                     continue;
                                 }
@@ -2735,7 +2735,7 @@ fn measure_vectors(
                                         bull_moves,
                                         column_moves,
                                     );
-                                    alone |= k == 0 && r.0.source_move.is_some();
+                                    alone |= together && r.0.source_move.is_some();
                                     keep(i, r, &mut recent);
                                 }
                             }
