@@ -769,6 +769,240 @@ pub(crate) fn convex_entry(
     first_root_from(line.lo, start, line.hi, f, line.n).map(|(s, normal)| Entry { s, normal })
 }
 
+/// First entry of `line` into the puck swept along the straight move of the torus centre
+/// `c0 → c1` with axis `k`, for a line running along the axis (`line.n == k`, bit for bit,
+/// as on a 3-axis program's floors): the swept puck's lower envelope over the line's foot,
+/// in place of [`convex_entry`]'s Newton walk, whose every step is a minimisation itself.
+///
+/// At pose `u` the puck holds the line from `φ(ρ(u))` below the centre to as far above,
+/// where `ρ(u)` is the foot's distance from the axis through `c(u)`, and `φ(ρ) = r` over
+/// the disk (`ρ ≤ a`), `√(r² − (ρ − a)²)` under the corner (`ρ ≤ a + r`). The entry is the
+/// least height `E = min_u c(u)·k − φ(ρ(u))`, a convex minimum: `ρ` is convex in `u`, and
+/// `−φ` convex and rising in `ρ`. Its derivative is continuous (disk and corner meet level).
+/// - Over the disk with a climbing move, the least is at or just beyond the disk's end the
+///   move falls towards: within `c = r·dz²/(2ρ'²)` of that end's height (`ρ` lies above its
+///   tangent there, so `r − φ ≥ ρ'²δ²/(2r)` a distance `δ` on, against the climb `δ·dz`),
+///   and at most at its height at the pose where those balance. On a floor whose passes
+///   climb a fraction of a micrometre over their length, `c` is far below 1e-13 mm, which
+///   ends the search in closed form; else Newton's method finishes it.
+/// - Elsewhere, safeguarded Newton on the derivative (its ends `∓∞` on the corner's rim),
+///   after a bound from below: the lower centre less `φ` at the foot's least distance from
+///   the centres' track.
+///
+/// `None` where this cannot decide, left to [`convex_entry`]: the line is not along `k`, the
+/// puck is not a bull's, or the envelope lies at or below the segment's start plus 1e-9 mm
+/// (the start may lie inside, which the general search answers by its own conventions).
+/// `Some(None)`: no entry within `lo..=hi`.
+pub(crate) fn axial_entry(
+    line: &Line,
+    puck: &Puck,
+    c0: DVec3,
+    c1: DVec3,
+    k: DVec3,
+) -> Option<Option<Entry>> {
+    if line.n != k || !(line.lo.is_finite() && line.hi.is_finite()) {
+        return None;
+    }
+    let (a, r) = (puck.a, puck.r);
+    if !(a > 0.0 && r > 0.0) {
+        return None;
+    }
+    let d = c1 - c0;
+    let m = line.o - c0;
+    let (h0, dh) = (across(m, k), across(d, k));
+    let (mz, dz) = (m.dot(k), d.dot(k));
+    let dh2 = dh.length_squared();
+    let scale = 1.0 + mz.abs() + dz.abs() + a + r;
+    // Whether an envelope height (relative to `c0`) no lower than `low` lies above the
+    // segment, by more than rounding.
+    let above = |low: f64| low - mz > line.hi + 1e-12 * scale;
+    let rho_min = {
+        let t = if dh2 > 0.0 {
+            (h0.dot(dh) / dh2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (h0 - t * dh).length()
+    };
+    let e_min = rho_min - a;
+    if e_min > r {
+        return Some(None);
+    }
+    let phi_max = if e_min <= 0.0 {
+        r
+    } else {
+        (r * r - e_min * e_min).sqrt()
+    };
+    if above(dz.min(0.0) - phi_max) {
+        return Some(None);
+    }
+    let clip = |(t1, t2): (f64, f64)| {
+        let (u1, u2) = (t1.max(0.0), t2.min(1.0));
+        (u1 <= u2).then_some((t1, t2, u1, u2))
+    };
+    // The corner's height under the line at `u` (`φ`), and `f'`, `f''` of
+    // `f(u) = u·dz − φ(ρ(u))` there.
+    let phi_at = |u: f64| {
+        let e = (h0 - u * dh).length() - a;
+        if e <= 0.0 {
+            Some(r)
+        } else {
+            let p2 = r * r - e * e;
+            (p2 >= 0.0).then(|| p2.sqrt())
+        }
+    };
+    let deriv = |u: f64| -> (f64, f64) {
+        let h = h0 - u * dh;
+        let rho = h.length();
+        let e = rho - a;
+        if e <= 0.0 {
+            return (dz, 0.0);
+        }
+        let rp = -h.dot(dh) / rho;
+        let phi2 = r * r - e * e;
+        if phi2 <= 0.0 {
+            // On the rim, where the corner stands vertical.
+            let inf = if rp < 0.0 {
+                f64::NEG_INFINITY
+            } else {
+                f64::INFINITY
+            };
+            return (inf, f64::INFINITY);
+        }
+        let phi = phi2.sqrt();
+        let rpp = (dh2 - rp * rp).max(0.0) / rho;
+        (
+            dz + e / phi * rp,
+            r * r / (phi2 * phi) * rp * rp + e / phi * rpp,
+        )
+    };
+    // Where the least lies: a pose known, or a piece of the corner's poses to search (its
+    // ends, whether each is the rim's, where its derivative is infinite).
+    enum Least {
+        At(f64),
+        Within(f64, f64, bool, bool),
+    }
+    let flat = if e_min <= 0.0 {
+        disk_interval(h0, -dh, a).and_then(clip)
+    } else {
+        None
+    };
+    let mut start = if dh2 > 0.0 {
+        h0.dot(dh) / dh2
+    } else {
+        f64::NAN
+    };
+    let piece = match flat {
+        Some((_, _, v1, _)) if dz == 0.0 => Least::At(v1),
+        Some((t1, t2, v1, v2)) => {
+            let up = dz > 0.0;
+            let end = if up { v1 } else { v2 };
+            if (up && t1 <= 0.0) || (!up && t2 >= 1.0) {
+                // The disk reaches past the move's end: its lowest pose is the move's.
+                Least::At(end)
+            } else {
+                let h = h0 - end * dh;
+                let rp = h.dot(dh) / h.length();
+                let e_flat = end * dz - r;
+                let c = 0.5 * r * dz * dz / (rp * rp);
+                if above(e_flat - c) {
+                    return Some(None);
+                }
+                let du = r * dz.abs() / (rp * rp);
+                start = if up { end - du } else { end + du };
+                let at_start = (0.0..=1.0)
+                    .contains(&start)
+                    .then(|| phi_at(start))
+                    .flatten()
+                    .map(|phi| start * dz - phi);
+                match at_start {
+                    Some(v) if v <= e_flat && v - (e_flat - c) <= 1e-13 => Least::At(start),
+                    _ if c <= 1e-13 => Least::At(end),
+                    _ => {
+                        let (t1, t2, u1, u2) = disk_interval(h0, -dh, a + r).and_then(clip)?;
+                        if up {
+                            Least::Within(u1, end, t1 >= 0.0, false)
+                        } else {
+                            Least::Within(end, u2, false, t2 <= 1.0)
+                        }
+                    }
+                }
+            }
+        }
+        None => {
+            let Some((t1, t2, u1, u2)) = disk_interval(h0, -dh, a + r).and_then(clip) else {
+                return Some(None);
+            };
+            if above((u1 * dz).min(u2 * dz) - phi_max) {
+                return Some(None);
+            }
+            Least::Within(u1, u2, t1 >= 0.0, t2 <= 1.0)
+        }
+    };
+    let u = match piece {
+        Least::At(u) => u,
+        Least::Within(lo, hi, _, _) if lo >= hi => lo,
+        Least::Within(lo, hi, rim_lo, rim_hi) => {
+            // f' rises across the piece: below 0 at a rim's start, above at its end, and
+            // dz at the disk's end, which points the right way there.
+            if !rim_lo && flat.is_none_or(|_| dz > 0.0) && deriv(lo).0 >= 0.0 {
+                lo
+            } else if !rim_hi && flat.is_none_or(|_| dz < 0.0) && deriv(hi).0 <= 0.0 {
+                hi
+            } else {
+                let (mut blo, mut bhi) = (lo, hi);
+                let dl = dh2.sqrt().max(dz.abs());
+                let mut u = start;
+                if !(u > lo && u < hi) {
+                    u = 0.5 * (lo + hi);
+                }
+                for _ in 0..100 {
+                    let (f1, f2) = deriv(u);
+                    if f1 == 0.0 || f1.is_nan() {
+                        break;
+                    }
+                    if f1 > 0.0 {
+                        bhi = u;
+                    } else {
+                        blo = u;
+                    }
+                    let mut next = u - f1 / f2;
+                    // Converged: a step below the tolerance, even onto the bracket's end.
+                    if next.is_finite() && (next - u).abs() * dl <= STEP_TOL_MM {
+                        u = next.clamp(blo, bhi);
+                        break;
+                    }
+                    if !(next > blo && next < bhi) {
+                        next = 0.5 * (blo + bhi);
+                    }
+                    let step = (next - u).abs() * dl;
+                    u = next;
+                    if step <= STEP_TOL_MM || (bhi - blo) * dl <= STEP_TOL_MM {
+                        break;
+                    }
+                }
+                u
+            }
+        }
+    };
+    let h = h0 - u * dh;
+    let rho = h.length();
+    let e = rho - a;
+    let (phi, normal) = if e <= 0.0 {
+        (r, -k)
+    } else {
+        let phi = (r * r - e * e).max(0.0).sqrt();
+        // From the disk's nearest point to the envelope's: `e` outwards, `φ` down.
+        let w = (e / rho) * h - phi * k;
+        (phi, w.normalize_or(-k))
+    };
+    let s = u * dz - phi - mz;
+    if s.is_nan() || s <= line.lo + 1e-9 {
+        return None;
+    }
+    Some((s <= line.hi).then_some(Entry { s, normal }))
+}
+
 /// The entry of `line` through the flat bottom of the puck swept by a translation (centres
 /// `c0 → c1`, axis `k`), in closed form, where it is one: no point of the swept puck lies
 /// more than `r` below the lower centre along `k`, so nothing of it lies below the plane
@@ -1671,6 +1905,77 @@ mod tests {
                 }
             }
             prop_assert!(convex_translation_entry(&line, &puck, c0, c1, k).is_none());
+        }
+
+        /// The axial entry is the swept puck's lowest point over the line's foot: no pose of
+        /// the move (2,001 evenly spaced) holds the line lower, and Newton's general search
+        /// finds the same entry (to 1e-9 mm where the envelope is not steep: at its rim the
+        /// general search's tolerance in distance is a larger one along the line) or, where
+        /// this finds none within the segment, none before its end. Moves of every kind:
+        /// any, level to a micrometre over millimetres (a rounded floor's), level, along
+        /// the axis, none; feet over the disk, the corner and beyond, axes tilted too.
+        #[test]
+        fn axial_entry_is_the_envelope_newton_finds(
+            c0 in v3(),
+            step in prop_oneof![
+                v3(),
+                (v3(), -1e-3..1e-3f64).prop_map(|(v, z)| DVec3::new(v.x * 8.0, v.y * 8.0, z)),
+                v3().prop_map(|v| DVec3::new(v.x, v.y, 0.0)),
+                (-2.0..2.0f64).prop_map(|z| DVec3::new(0.0, 0.0, z)),
+                Just(DVec3::ZERO),
+            ],
+            k in prop_oneof![3 => Just(DVec3::Z), 1 => v3()],
+            along in -0.2..1.2f64,
+            aside in v3(),
+            lo in -3.0..0.0f64,
+            len in 0.0..8.0f64,
+            a in 0.2..3.0f64,
+            r in 0.1..2.0f64,
+        ) {
+            prop_assume!(k.length() > 1e-3);
+            let k = k.normalize();
+            // A level step is level along `k` only for the vertical axis.
+            let c1 = c0 + step;
+            let foot = c0 + along * step + aside;
+            let o = foot - (foot - c0).dot(k) * k - (r + 2.0) * k + c0.dot(k) * k;
+            let line = Line { o, n: k, lo, hi: lo + len };
+            let puck = Puck { a, r };
+            let Some(found) = axial_entry(&line, &puck, c0, c1, k) else {
+                return Ok(());
+            };
+            let newton = convex_translation_entry(&line, &puck, c0, c1, k);
+            // The envelope at pose u (the line's parameter there), where it reaches over.
+            let (m, d) = (o - c0, c1 - c0);
+            let low = |u: f64| {
+                let e = across(m - u * d, k).length() - a;
+                (e <= r).then(|| u * d.dot(k) - if e <= 0.0 { r } else { (r * r - e * e).sqrt() } - m.dot(k))
+            };
+            match found {
+                None => {
+                    prop_assert!(newton.is_none_or(|e| e.s >= line.hi - 1e-9), "{newton:?}");
+                    for i in 0..=2000 {
+                        if let Some(s) = low(f64::from(i) / 2000.0) {
+                            prop_assert!(s > line.hi - 1e-9 || s < line.lo, "{s}");
+                        }
+                    }
+                }
+                Some(e) => {
+                    prop_assert!(e.s > line.lo && e.s <= line.hi);
+                    prop_assert!((e.normal.length() - 1.0).abs() < 1e-9);
+                    for i in 0..=2000 {
+                        if let Some(s) = low(f64::from(i) / 2000.0) {
+                            prop_assert!(s >= e.s - 1e-12, "pose {i}: {s} below {}", e.s);
+                        }
+                    }
+                    let Some(g) = newton else {
+                        return Err(TestCaseError::fail(format!("Newton found nothing, axial {e:?}")));
+                    };
+                    if e.normal.dot(k) < -1e-3 {
+                        prop_assert!((e.s - g.s).abs() <= 1e-9, "{e:?} {g:?}");
+                        prop_assert!((e.normal - g.normal).length() <= 1e-5, "{e:?} {g:?}");
+                    }
+                }
+            }
         }
     }
 
