@@ -319,6 +319,8 @@ impl TriangleBvh {
 /// sphere_on_plate a query walked some 100 boxes).
 pub struct TriangleGrid<'a> {
     tris: &'a [Triangle],
+    /// Per triangle, its plane as [`beyond_plane`] tests it.
+    planes: Vec<Plane>,
     lo: DVec3,
     inv: f64,
     dims: [usize; 3],
@@ -411,6 +413,7 @@ impl<'a> TriangleGrid<'a> {
         }
         Some(TriangleGrid {
             tris,
+            planes: tris.iter().map(Plane::of).collect(),
             lo,
             inv,
             dims,
@@ -451,7 +454,9 @@ impl<'a> TriangleGrid<'a> {
                 for x in l[0]..=h[0] {
                     let c = (z * d[1] + y) * d[0] + x;
                     for &i in &self.items[self.start[c] as usize..self.start[c + 1] as usize] {
-                        if nearer_than(p, &self.tris[i as usize], r) {
+                        let i = i as usize;
+                        let t = &self.tris[i];
+                        if !self.planes[i].beyond(p, r, t.v[0]) && distance_to_triangle(p, t) < r {
                             return Some(true);
                         }
                     }
@@ -467,6 +472,38 @@ impl<'a> TriangleGrid<'a> {
 #[inline]
 fn nearer_than(p: DVec3, t: &Triangle, r: f64) -> bool {
     !beyond_plane(p, t, r) && distance_to_triangle(p, t) < r
+}
+
+/// A triangle's plane kept for [`Plane::beyond`]: the normal `(b − a) × (c − a)` (not
+/// unit), its product with the first corner `a` and its squared length. On sphere_on_plate's bull program the grid's queries (a plate's gouges a
+/// micrometre deep) test some 20 triangles each, most of them passed over by their planes:
+/// computing each plane once took their cost from 285 M to 208 M instructions.
+#[derive(Debug, Clone, Copy)]
+struct Plane {
+    n: DVec3,
+    na: f64,
+    nn: f64,
+}
+
+impl Plane {
+    fn of(t: &Triangle) -> Plane {
+        let [a, b, c] = t.v;
+        let n = (b - a).cross(c - a);
+        Plane {
+            n,
+            na: n.dot(a),
+            nn: n.length_squared(),
+        }
+    }
+
+    /// [`beyond_plane`] for this triangle, with the same margin (`n·p − n·a` rounds to
+    /// some 1e-16 of the coordinates, far below it).
+    #[inline]
+    fn beyond(&self, p: DVec3, r: f64, a: DVec3) -> bool {
+        let h = self.n.dot(p) - self.na;
+        let m = r + 1e-12 * (1.0 + (p - a).abs().max_element());
+        h * h > m * m * self.nn
+    }
 }
 
 /// Whether `p` lies farther than `r` from the plane of triangle `t`, by more than the
@@ -1021,6 +1058,60 @@ mod tests {
             let brute = tris.iter().any(|t| intersect(t, o, d, t0, t1).is_some());
             prop_assert_eq!(bvh.any_hit(o, d, t0, t1), brute);
             prop_assert_eq!(bvh.lowest_hit(o, d, t0, t1, |_| true).is_some(), brute);
+        }
+    }
+
+    /// A plate at z = −2 fanned from its corners to an octagon about its middle (long
+    /// coplanar slivers whose boxes overlap, as sphere_on_plate's), under the folded sheet.
+    fn plate_and_sheet() -> Vec<Triangle> {
+        let mut tris = folded_sheet();
+        let ring: Vec<DVec3> = (0..8)
+            .map(|i| {
+                let a = f64::from(i) * std::f64::consts::FRAC_PI_4;
+                DVec3::new(1.5 * a.cos(), 1.5 * a.sin(), -2.0)
+            })
+            .collect();
+        let corners = [(-8.0, -8.0), (8.0, -8.0), (8.0, 8.0), (-8.0, 8.0)]
+            .map(|(x, y)| DVec3::new(x, y, -2.0));
+        for (i, w) in ring.iter().zip(ring.iter().cycle().skip(1)).enumerate() {
+            let c = corners[i / 2];
+            tris.push(Triangle::new(c, *w.0, *w.1));
+        }
+        for i in 0..4 {
+            tris.push(Triangle::new(corners[i], ring[2 * i], corners[(i + 3) % 4]));
+        }
+        tris
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2_000))]
+
+        /// The grid answers as the tree and as the brute force over every triangle, where it
+        /// answers: anywhere, and just under the plate at the reading's own depth less or
+        /// more a millionth (the crease check's radius), where coplanar slivers lie at the
+        /// radius itself.
+        #[test]
+        fn grid_any_within_equals_the_tree_and_brute_force(
+            p in (-7.0..7.0f64, -7.0..7.0f64, -3.0..5.0f64),
+            under in any::<bool>(),
+            depth in 1e-6..1e-2f64,
+            r in 1e-4..3.0f64,
+            shrink in any::<bool>(),
+        ) {
+            let tris = plate_and_sheet();
+            let bvh = TriangleBvh::new(&tris);
+            let grid = TriangleGrid::new(&tris).expect("a grid for a small part");
+            let (p, r) = if under {
+                let f = if shrink { 1.0 - 1e-6 } else { 1.0 + 1e-6 };
+                (DVec3::new(p.0, p.1, -2.0 - depth), depth * f)
+            } else {
+                (DVec3::new(p.0, p.1, p.2), r)
+            };
+            let brute = tris.iter().any(|t| distance_to_triangle(p, t) < r);
+            prop_assert_eq!(bvh.any_within(p, r), brute);
+            if let Some(g) = grid.any_within(p, r) {
+                prop_assert_eq!(g, brute);
+            }
         }
     }
 
