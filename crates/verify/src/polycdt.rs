@@ -336,14 +336,17 @@ impl PolyCdt {
     fn flip_inner(&mut self) {
         let mut stack = std::mem::take(&mut self.stack);
         stack.clear();
-        stack.extend(
-            (0..self.adj.len() as u32)
-                .flat_map(|t| (0..3).map(move |e| (t, e)))
-                .filter(|&(t, e)| {
-                    let u = self.adj[t as usize][e];
-                    u != NONE && t < u && !self.clearly_delaunay(t, e, u)
-                }),
-        );
+        // Plain loops: as iterator chains (`flat_map`, `filter`, `extend`) this scan and
+        // `for_each_inner_edge`'s cost sphere_on_plate's ball verification 1,856 M
+        // instructions against 1,806 M (the face remesh 332 M against 280 M).
+        for (t, nb) in self.adj.iter().enumerate() {
+            let t = t as u32;
+            for (e, &u) in nb.iter().enumerate() {
+                if u != NONE && t < u && !self.clearly_delaunay(t, e, u) {
+                    stack.push((t, e));
+                }
+            }
+        }
         self.stack = stack;
         self.flip_all();
     }
@@ -369,25 +372,17 @@ impl PolyCdt {
         &self.tris
     }
 
-    /// The inner edges (each once) as point pairs, with the triangles on both sides (the
-    /// first a place to start [`PolyCdt::insert_near`] from).
-    pub(crate) fn inner_edges(&self) -> impl Iterator<Item = ([f64; 2], [f64; 2], u32, u32)> + '_ {
-        self.tris
-            .iter()
-            .zip(&self.adj)
-            .enumerate()
-            .flat_map(move |(t, (v, nb))| {
-                (0..3)
-                    .filter(move |&k| nb[k] != NONE && (t as u32) < nb[k])
-                    .map(move |k| {
-                        (
-                            self.pts[v[k] as usize],
-                            self.pts[v[(k + 1) % 3] as usize],
-                            t as u32,
-                            nb[k],
-                        )
-                    })
-            })
+    /// Calls `f` on the inner edges (each once) as point pairs, with the triangles on both
+    /// sides (the first a place to start [`PolyCdt::insert_near`] from), in triangle order.
+    pub(crate) fn for_each_inner_edge(&self, mut f: impl FnMut([f64; 2], [f64; 2], u32, u32)) {
+        for (t, (v, nb)) in self.tris.iter().zip(&self.adj).enumerate() {
+            for k in 0..3 {
+                if nb[k] != NONE && (t as u32) < nb[k] {
+                    let (p, q) = (self.pts[v[k] as usize], self.pts[v[(k + 1) % 3] as usize]);
+                    f(p, q, t as u32, nb[k]);
+                }
+            }
+        }
     }
 
     /// Inserts the point `p` strictly inside the polygon; `None` (the triangulation is then

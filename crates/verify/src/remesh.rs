@@ -621,10 +621,11 @@ fn face_mesh_own(
         let rule = Midpoints::new(&frame, s, near);
         for _ in 0..MID_ROUNDS {
             cands.clear();
-            cands.extend(cdt.inner_edges().filter_map(|(p, q, t, u)| {
-                rule.candidate(p, q)
-                    .map(|(m, l2)| (m, l2, [t as usize, u as usize]))
-            }));
+            cdt.for_each_inner_edge(|p, q, t, u| {
+                if let Some((m, l2)) = rule.candidate(p, q) {
+                    cands.push((m, l2, [t as usize, u as usize]));
+                }
+            });
             mids.clear();
             rule.choose(cands, cdt.triangles().len(), longest, mids);
             if mids.is_empty() {
