@@ -475,9 +475,11 @@ fn nearer_than(p: DVec3, t: &Triangle, r: f64) -> bool {
 }
 
 /// A triangle's plane kept for [`Plane::beyond`]: the normal `(b − a) × (c − a)` (not
-/// unit), its product with the first corner `a` and its squared length. On sphere_on_plate's bull program the grid's queries (a plate's gouges a
-/// micrometre deep) test some 20 triangles each, most of them passed over by their planes:
-/// computing each plane once took their cost from 285 M to 208 M instructions.
+/// unit), its product with the first corner `a` and its squared length. On
+/// sphere_on_plate's bull program the grid's queries (a plate's gouges a micrometre deep)
+/// test some 20 triangles each, most of them passed over by their planes: computing each
+/// plane once took their cost from 285 M to 208 M instructions. The tree's queries, far
+/// fewer, keep [`beyond_plane`], which computes the same test from the corners.
 #[derive(Debug, Clone, Copy)]
 struct Plane {
     n: DVec3,

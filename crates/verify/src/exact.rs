@@ -1937,7 +1937,8 @@ mod tests {
             // A level step is level along `k` only for the vertical axis.
             let c1 = c0 + step;
             let foot = c0 + along * step + aside;
-            let o = foot - (foot - c0).dot(k) * k - (r + 2.0) * k + c0.dot(k) * k;
+            // The line's origin `r + 2` below the centre plane at `c0`, under the foot.
+            let o = foot - (foot - c0).dot(k) * k - (r + 2.0) * k;
             let line = Line { o, n: k, lo, hi: lo + len };
             let puck = Puck { a, r };
             let Some(found) = axial_entry(&line, &puck, c0, c1, k) else {

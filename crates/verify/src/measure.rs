@@ -723,6 +723,15 @@ fn consider_axial(
     true
 }
 
+/// Whether move `mv`, whose slab a line enters at `s0`, cannot change the best entry
+/// `found`: it holds it (its entry is known), or enters its slab after it, or at it (the
+/// segment's start, or a floor that level moves share) where only a lower-numbered move's
+/// tie could replace it (see [`take_least`]).
+#[inline]
+fn cannot_beat(found: Option<(Entry, u32)>, mv: u32, s0: f64) -> bool {
+    found.is_some_and(|(f, m)| m == mv || s0 > f.s || (s0 == f.s && mv >= m))
+}
+
 /// Keeps in `found` the least entry, among equal ones the lowest-numbered move's.
 fn take_least(e: Entry, mv: u32, found: &mut Option<(Entry, u32)>) {
     if found.is_none_or(|(f, fm)| e.s < f.s || (e.s == f.s && mv < fm)) {
@@ -2083,8 +2092,8 @@ fn measure_vectors(
         let e = if bull {
             let k = axis_of(mv);
             common_axis
-                .filter(|&k| line.n == k)
-                .and_then(|k| crate::exact::axial_entry(&line, &puck, c0, c1, k))
+                .filter(|&axis| line.n == axis)
+                .and_then(|axis| crate::exact::axial_entry(&line, &puck, c0, c1, axis))
                 .unwrap_or_else(|| crate::exact::convex_entry(&line, &puck, (c0, c1), k, false))
         } else {
             entry_of(&line, mv, c0, c1)
@@ -2142,11 +2151,9 @@ fn measure_vectors(
             // dome bull 10.22 G with the queue, 9.55 G without.
             let mut consider = |s0: f64, s1: f64, ci: usize, found: &mut Option<(Entry, u32)>| {
                 let (_, mv, c0, c1) = volumes.items[ci];
-                // Entering the slab after the best entry, the move cannot beat it; at it (the
-                // segment's start, or a floor that level moves share) only a lower-numbered
-                // move's tie could replace it (see `take_least`). The move that holds the
-                // best (the seed's, mostly) has had its first entry searched already.
-                if found.is_some_and(|(f, m)| m == mv || s0 > f.s || (s0 == f.s && mv >= m)) {
+                // The move that holds the best (the seed's, mostly) has had its first entry
+                // searched already.
+                if cannot_beat(*found, mv, s0) {
                     return;
                 }
                 let best = found.map_or(hi0, |(f, _)| f.s);
@@ -2170,7 +2177,7 @@ fn measure_vectors(
                     return false;
                 };
                 let (_, mv, c0, c1) = volumes.items[ci];
-                if found.is_some_and(|(f, m)| m == mv || s0 > f.s || (s0 == f.s && mv >= m)) {
+                if cannot_beat(*found, mv, s0) {
                     return true;
                 }
                 let best = found.map_or(hi0, |(f, _)| f.s);
