@@ -749,12 +749,14 @@ const DIRECT_TILE: usize = 256;
 /// 4.82 G; 32: 5.65 G).
 const DIRECT_GROUP: usize = 8;
 
-/// The moves that last answered a tile's vectors, tried in turn (latest first) as seeds
-/// when the latest one misses a vector (see `measure_vectors`): a vector no seed enters
-/// searches with its whole segment. On mount_rush's ball program, whose seeds
-/// miss the vectors of walls beside and below the passes, the first measure's tree walk
-/// visited 41.3 M nodes with the latest move alone, 29.5 M with the last 4 and 25.0 M
-/// with the last 8.
+/// The moves that last answered a tile's vectors, the seeds (see `measure_vectors`): the one
+/// whose core lies nearest a vector is tried first, then the others in turn (latest first)
+/// should it miss; a vector no seed enters searches with its whole segment. On mount_rush's
+/// ball program, whose seeds miss the vectors of walls beside and below the passes, the
+/// first measure's tree walk visited 41.3 M nodes with the latest move alone, 29.5 M with
+/// the last 4 and 25.0 M with the last 8 (tried latest first). With the nearest tried first,
+/// 16 cost sphere_on_plate's and the dome's ball programs 1 % to 2 % more than 8, and 4 the
+/// same.
 const RECENT_SEEDS: usize = 8;
 
 /// The most moves a group's vectors search in a list in place of the tree; beyond it the
@@ -2075,6 +2077,24 @@ fn measure_vectors(
         );
         Some((mv, a.tip + puck.r * a.axis, b.tip + puck.r * b.axis))
     };
+    // The squared distance from `p` to a seed's core: the disk of radius `a` about its
+    // centres, swept (for a ball, the centres' segment). The puck's surface lies `r` out
+    // from the core, so the move whose core lies nearest a vector's origin is the one whose
+    // puck most likely holds its first entry (exactly so for a ball where the nearest centre
+    // lies along the vector's normal). Taken from the moves' segment alone: its nearest
+    // point to `p`, with the offset across the axis shortened by `a`.
+    let core_distance2 = |p: DVec3, (mv, c0, c1): (u32, DVec3, DVec3)| {
+        let d = c1 - c0;
+        let w = p - from_segment(p, c0, d, inv_or_zero(d.length_squared()));
+        if puck.a > 0.0 {
+            let k = axis_of(mv);
+            let along = w.dot(k);
+            let across = ((w - along * k).length() - puck.a).max(0.0);
+            across * across + along * along
+        } else {
+            w.length_squared()
+        }
+    };
     // `among`: the items of `volumes` to search instead of the tree (a superset of those the
     // vector's segment up to its seed's entry meets; see the tiles below), or `None` for the
     // tree; the columns likewise, laid out (`columns_listed`, see `column_listed`).
@@ -2687,10 +2707,35 @@ fn measure_vectors(
                             unseeded.clear();
                             for &(_, i) in group {
                                 let v = &chunk[i as usize];
-                                let bound = recent
-                                    .iter()
-                                    .rev()
-                                    .find_map(|&m| seed_entry(v, seed_of(m)?));
+                                // The recent move nearest the vector first (the latest among
+                                // equals), then the others, latest first. Tried latest first
+                                // alone, half the vectors of sphere_on_plate's and the dome's
+                                // ball programs were bounded more than 10 µm above their first
+                                // entry, and searched twice as many runs as the others; the
+                                // nearest first, a fifth. Callgrind (1 thread, M instructions):
+                                // sphere_on_plate ball 1,806 -> 1,751, dome ball 1,870 ->
+                                // 1,794, mount_rush ball 13,395 -> 13,113, sphere_on_plate
+                                // bull 6,272 -> 6,120, dome bull 5,806 -> 5,718,
+                                // sphere_on_plate flat 4,237 -> 4,242. Also trying the second
+                                // nearest, and keeping the lower entry, cost more than it
+                                // saved (sphere_on_plate ball 1,819).
+                                let mut nearest: Option<(f64, (u32, DVec3, DVec3))> = None;
+                                for seed in recent.iter().rev().filter_map(|&m| seed_of(m)) {
+                                    let d = core_distance2(v.o, seed);
+                                    if nearest.is_none_or(|(best, _)| d < best) {
+                                        nearest = Some((d, seed));
+                                    }
+                                }
+                                let first = nearest.map(|(_, seed)| seed.0);
+                                let bound = nearest
+                                    .and_then(|(_, seed)| seed_entry(v, seed))
+                                    .or_else(|| {
+                                        recent
+                                            .iter()
+                                            .rev()
+                                            .filter(|&&m| Some(m) != first)
+                                            .find_map(|&m| seed_entry(v, seed_of(m)?))
+                                    });
                                 let tried = !recent.is_empty();
                                 match bound {
                                     Some(b) => pending.push((i, (true, Some(b)))),
