@@ -170,7 +170,7 @@ impl TriangleBvh {
             })
             .collect();
         drop(cent);
-        keyed.par_sort_unstable();
+        crate::radix::sort_by_key(&mut keyed, |k| k.0);
         let order: Vec<u32> = keyed.iter().map(|&(_, i)| i).collect();
         drop(keyed);
         let sorted: Vec<Triangle> = order.par_iter().map(|&i| tris[i as usize]).collect();

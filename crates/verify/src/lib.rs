@@ -15,6 +15,7 @@ pub mod pipeline;
 pub mod ply;
 mod polycdt;
 pub mod proximity;
+mod radix;
 pub mod rapids;
 pub mod refine;
 pub mod remesh;

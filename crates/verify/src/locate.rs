@@ -598,7 +598,7 @@ impl PatchBvh {
             .enumerate()
             .map(|(i, c)| (c, i as u32))
             .collect();
-        order.par_sort_unstable();
+        crate::radix::sort_by_key(&mut order, |k| k.0);
         let sorted: Vec<Patch> = order.iter().map(|&(_, i)| patches[i as usize]).collect();
         let sboxes: Vec<(DVec3, DVec3)> = order.iter().map(|&(_, i)| boxes[i as usize]).collect();
         let mut nodes = Vec::with_capacity(2 * sorted.len() + 1);
@@ -1155,7 +1155,7 @@ pub fn locate(
         .enumerate()
         .map(|(i, c)| (c, i as u32))
         .collect();
-    keyed.par_sort_unstable();
+    crate::radix::sort_by_key(&mut keyed, |k| k.0);
     let order: Vec<u32> = keyed.into_iter().map(|(_, i)| i).collect();
     let mut out = vec![Found::default(); vectors.len()];
     let mut again = Vec::new();

@@ -1279,7 +1279,7 @@ impl Extras {
         let codes = crate::locate::morton_codes(&mids);
         let mut order: Vec<(u64, usize)> =
             codes.into_iter().enumerate().map(|(i, c)| (c, i)).collect();
-        order.par_sort_unstable();
+        crate::radix::sort_by_key(&mut order, |k| k.0);
         let bounds: Vec<_> = order.iter().map(|&(_, i)| bounds[i]).collect();
         let items: Vec<_> = order.iter().map(|&(_, i)| items[i]).collect();
         let mids = items
@@ -2646,7 +2646,7 @@ fn measure_vectors(
                 let codes = crate::locate::morton_codes_by(chunk, |v| v.o);
                 let mut order: Vec<(u64, u32)> =
                     codes.into_par_iter().zip(0..chunk.len() as u32).collect();
-                order.par_sort_unstable();
+                crate::radix::sort_by_key(&mut order, |k| k.0);
                 let done: Vec<TileReadings> = order
                     .par_chunks(DIRECT_TILE)
                     // One tile per piece: tiles differ in cost with the part's shape (a flat
