@@ -196,6 +196,11 @@ impl TriangleBvh {
         (!self.tris.is_empty()).then(|| (self.nodes[0].min, self.nodes[0].max))
     }
 
+    /// The triangles, in the tree's order (a [`TriangleGrid`] over them numbers them so).
+    pub(crate) fn tree_triangles(&self) -> &[Triangle] {
+        &self.tris
+    }
+
     /// Number of triangles.
     pub fn len(&self) -> usize {
         self.tris.len()
@@ -464,6 +469,71 @@ impl<'a> TriangleGrid<'a> {
             }
         }
         Some(false)
+    }
+}
+
+impl TriangleGrid<'_> {
+    /// [`TriangleBvh::lowest_hit`] for the same triangles, every crossing accepted, from the
+    /// cubes that the segment `origin + t·dir`, `t ∈ [t0, t1]`, meets (padded for rounding):
+    /// the crossing with the smallest `t`, ties to the smaller triangle index. `None` when
+    /// the segment's box spans more than 64 cubes (ask the tree). A triangle the segment
+    /// crosses lists itself in the cube that holds the crossing, which the segment meets.
+    pub fn lowest_hit(&self, origin: DVec3, dir: DVec3, t0: f64, t1: f64) -> Option<Option<Hit>> {
+        if t0 > t1 || t0.is_nan() || t1.is_nan() {
+            return Some(None);
+        }
+        let (p, q) = (origin + t0 * dir, origin + t1 * dir);
+        let pad = DVec3::splat(1e-9 * (1.0 + p.abs().max(q.abs()).max_element()));
+        let (a, b) = (p.min(q) - pad - self.lo, p.max(q) + pad - self.lo);
+        let d = self.dims;
+        let mut l = [0usize; 3];
+        let mut h = [0usize; 3];
+        for i in 0..3 {
+            let (x0, x1) = (a[i] * self.inv, b[i] * self.inv);
+            if !(x0.is_finite() && x1.is_finite()) {
+                return None;
+            }
+            if x1 < 0.0 || x0 >= d[i] as f64 {
+                return Some(None);
+            }
+            l[i] = (x0.floor().max(0.0) as usize).min(d[i] - 1);
+            h[i] = (x1.floor().max(0.0) as usize).min(d[i] - 1);
+        }
+        if (0..3).map(|i| h[i] - l[i] + 1).product::<usize>() > GRID_QUERY_CELLS {
+            return None;
+        }
+        let inv_dir = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
+        let cell = 1.0 / self.inv;
+        let mut best: Option<Hit> = None;
+        for z in l[2]..=h[2] {
+            for y in l[1]..=h[1] {
+                for x in l[0]..=h[0] {
+                    let c = (z * d[1] + y) * d[0] + x;
+                    let items = &self.items[self.start[c] as usize..self.start[c + 1] as usize];
+                    if items.is_empty() {
+                        continue;
+                    }
+                    // The cube's box, grown by the pad: the segment passes it by before its
+                    // triangles are tried.
+                    let at = self.lo + DVec3::new(x as f64, y as f64, z as f64) * cell;
+                    let hi = best.map_or(t1, |b| b.t);
+                    if slab_entry(origin, inv_dir, at - pad, at + cell + pad, t0, hi).is_none() {
+                        continue;
+                    }
+                    for &i in items {
+                        let hi = best.map_or(t1, |b| b.t);
+                        if let Some(h) = intersect(&self.tris[i as usize], origin, dir, t0, hi) {
+                            let better =
+                                best.is_none_or(|b| h.t < b.t || (h.t == b.t && i < b.triangle));
+                            if better {
+                                best = Some(Hit { triangle: i, ..h });
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        Some(best)
     }
 }
 
@@ -1060,6 +1130,49 @@ mod tests {
             let brute = tris.iter().any(|t| intersect(t, o, d, t0, t1).is_some());
             prop_assert_eq!(bvh.any_hit(o, d, t0, t1), brute);
             prop_assert_eq!(bvh.lowest_hit(o, d, t0, t1, |_| true).is_some(), brute);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2_000))]
+
+        /// The grid's lowest crossing is the brute force's over every triangle (least `t`,
+        /// ties to the smaller index) and the tree's: on the folded sheet and on the plate
+        /// of long slivers under it, for short segments in any direction (some vertical),
+        /// some starting at a triangle's corner as the material check's inner rays do, some
+        /// passing through one (where the triangles around it tie).
+        #[test]
+        fn grid_lowest_hit_equals_the_tree_and_brute_force(
+            plate in any::<bool>(),
+            o in (-6.0..6.0f64, -6.0..6.0f64, -3.0..6.0f64),
+            corner in proptest::option::of((0usize..10_000, 0usize..3, any::<bool>())),
+            d in (-1.0..1.0f64, -1.0..1.0f64, -1.0..1.0f64),
+            vertical in any::<bool>(),
+            t0 in 0.0..0.5f64,
+            len in 0.0..3.0f64,
+        ) {
+            let tris = if plate { plate_and_sheet() } else { folded_sheet() };
+            let bvh = TriangleBvh::new(&tris);
+            let grid = TriangleGrid::new(&tris).expect("a grid");
+            let d = if vertical { DVec3::Z } else { DVec3::new(d.0, d.1, d.2) };
+            prop_assume!(d.length() > 0.1);
+            let d = d.normalize();
+            let t1 = t0 + len;
+            let o = match corner {
+                Some((t, k, false)) => tris[t % tris.len()].v[k],
+                Some((t, k, true)) => tris[t % tris.len()].v[k] - (t0 + 0.5 * len) * d,
+                None => DVec3::new(o.0, o.1, o.2),
+            };
+            let brute = tris
+                .iter()
+                .enumerate()
+                .filter_map(|(i, t)| intersect(t, o, d, t0, t1).map(|h| (h.t, i as u32)))
+                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let tree = bvh.lowest_hit(o, d, t0, t1, |_| true).map(|h| (h.t, h.triangle));
+            prop_assert_eq!(tree, brute);
+            if let Some(got) = grid.lowest_hit(o, d, t0, t1) {
+                prop_assert_eq!(got.map(|h| (h.t, h.triangle)), brute);
+            }
         }
     }
 

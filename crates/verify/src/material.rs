@@ -28,7 +28,7 @@
 use cam_core::{DVec3, Mesh, Toolpath};
 use rayon::prelude::*;
 
-use crate::deviation::TriangleBvh;
+use crate::deviation::{TriangleBvh, TriangleGrid};
 use crate::refine::RefinedMesh;
 
 /// Per-vertex inner vector lengths and how many were shortened.
@@ -85,13 +85,26 @@ pub fn inner_lengths_at(
     let open_sky = three_axis && !closed;
     // Longer than any segment inside the part.
     let reach_mm = bvh.bounds().map_or(0.0, |(lo, hi)| (hi - lo).length()) + 1.0;
+    // The short inner rays through a grid of the part's triangles where there are at least
+    // as many rays as triangles, the tree where a ray's box spans too many cubes; only the
+    // crossing's distance is kept, the same from both. On mount_rush's ball program (41 k
+    // rays, 15.6 k triangles) each ray tested 95 of the tree's boxes: 13,030 M instructions
+    // in all against 12,563 M with the grid (callgrind, one thread).
+    let grid = (idx.len() >= bvh.len())
+        .then(|| TriangleGrid::new(bvh.tree_triangles()))
+        .flatten();
     let out: Vec<(f64, u8)> = idx
         .par_iter()
         .map(|&i| {
             let (p, n) = (refined.positions[i], refined.normals[i]);
             // The vertex lies on its own faces; skip their rounding at the start.
             let t0 = 1e-7 * (1.0 + p.abs().max_element());
-            let (len, kind) = match bvh.lowest_hit(p, -n, t0, (2.0 * inside_mm).max(t0), |_| true) {
+            let t1 = (2.0 * inside_mm).max(t0);
+            let hit = grid
+                .as_ref()
+                .and_then(|g| g.lowest_hit(p, -n, t0, t1))
+                .unwrap_or_else(|| bvh.lowest_hit(p, -n, t0, t1, |_| true));
+            let (len, kind) = match hit {
                 Some(h) => (0.5 * h.t, 1),
                 None => (inside_mm, 0),
             };
