@@ -479,8 +479,49 @@ impl TriangleGrid<'_> {
     /// the segment's box spans more than 64 cubes (ask the tree). A triangle the segment
     /// crosses lists itself in the cube that holds the crossing, which the segment meets.
     pub fn lowest_hit(&self, origin: DVec3, dir: DVec3, t0: f64, t1: f64) -> Option<Option<Hit>> {
+        let mut best: Option<Hit> = None;
+        self.along(origin, dir, t0, t1, |items, hi| {
+            for &i in items {
+                let top = best.map_or(t1, |b| b.t);
+                if let Some(h) = intersect(&self.tris[i as usize], origin, dir, t0, top)
+                    && best.is_none_or(|b| h.t < b.t || (h.t == b.t && i < b.triangle))
+                {
+                    best = Some(Hit { triangle: i, ..h });
+                }
+            }
+            *hi = best.map_or(t1, |b| b.t);
+            true
+        })?;
+        Some(best)
+    }
+
+    /// [`TriangleBvh::any_hit`] for the same triangles, from the cubes as
+    /// [`TriangleGrid::lowest_hit`] takes them; `None` where that asks the tree.
+    pub fn any_hit(&self, origin: DVec3, dir: DVec3, t0: f64, t1: f64) -> Option<bool> {
+        let mut found = false;
+        self.along(origin, dir, t0, t1, |items, _| {
+            found = items
+                .iter()
+                .any(|&i| intersect(&self.tris[i as usize], origin, dir, t0, t1).is_some());
+            !found
+        })?;
+        Some(found)
+    }
+
+    /// Calls `f(triangles, hi)` for each cube, in turn, that the segment from `t0` to `hi`
+    /// meets (`hi` from `t1`, lowered by `f`, padded for rounding) and that lists some; `f`
+    /// returns whether to go on. `None`, calling nothing, when the segment's box spans
+    /// more than [`GRID_QUERY_CELLS`] cubes.
+    fn along(
+        &self,
+        origin: DVec3,
+        dir: DVec3,
+        t0: f64,
+        t1: f64,
+        mut f: impl FnMut(&[u32], &mut f64) -> bool,
+    ) -> Option<()> {
         if t0 > t1 || t0.is_nan() || t1.is_nan() {
-            return Some(None);
+            return Some(());
         }
         let (p, q) = (origin + t0 * dir, origin + t1 * dir);
         let pad = DVec3::splat(1e-9 * (1.0 + p.abs().max(q.abs()).max_element()));
@@ -494,7 +535,7 @@ impl TriangleGrid<'_> {
                 return None;
             }
             if x1 < 0.0 || x0 >= d[i] as f64 {
-                return Some(None);
+                return Some(());
             }
             l[i] = (x0.floor().max(0.0) as usize).min(d[i] - 1);
             h[i] = (x1.floor().max(0.0) as usize).min(d[i] - 1);
@@ -504,7 +545,7 @@ impl TriangleGrid<'_> {
         }
         let inv_dir = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
         let cell = 1.0 / self.inv;
-        let mut best: Option<Hit> = None;
+        let mut hi = t1;
         for z in l[2]..=h[2] {
             for y in l[1]..=h[1] {
                 for x in l[0]..=h[0] {
@@ -513,27 +554,17 @@ impl TriangleGrid<'_> {
                     if items.is_empty() {
                         continue;
                     }
-                    // The cube's box, grown by the pad: the segment passes it by before its
-                    // triangles are tried.
+                    // The cube's box, grown by the pad.
                     let at = self.lo + DVec3::new(x as f64, y as f64, z as f64) * cell;
-                    let hi = best.map_or(t1, |b| b.t);
-                    if slab_entry(origin, inv_dir, at - pad, at + cell + pad, t0, hi).is_none() {
-                        continue;
-                    }
-                    for &i in items {
-                        let hi = best.map_or(t1, |b| b.t);
-                        if let Some(h) = intersect(&self.tris[i as usize], origin, dir, t0, hi) {
-                            let better =
-                                best.is_none_or(|b| h.t < b.t || (h.t == b.t && i < b.triangle));
-                            if better {
-                                best = Some(Hit { triangle: i, ..h });
-                            }
-                        }
+                    if slab_entry(origin, inv_dir, at - pad, at + cell + pad, t0, hi).is_some()
+                        && !f(items, &mut hi)
+                    {
+                        return Some(());
                     }
                 }
             }
         }
-        Some(best)
+        Some(())
     }
 }
 
@@ -1137,7 +1168,8 @@ mod tests {
         #![proptest_config(ProptestConfig::with_cases(2_000))]
 
         /// The grid's lowest crossing is the brute force's over every triangle (least `t`,
-        /// ties to the smaller index) and the tree's: on the folded sheet and on the plate
+        /// ties to the smaller index) and the tree's, and its `any_hit` whether there is one
+        /// (also over longer segments): on the folded sheet and on the plate
         /// of long slivers under it, for short segments in any direction (some vertical),
         /// some starting at a triangle's corner as the material check's inner rays do, some
         /// passing through one (where the triangles around it tie).
@@ -1172,6 +1204,15 @@ mod tests {
             prop_assert_eq!(tree, brute);
             if let Some(got) = grid.lowest_hit(o, d, t0, t1) {
                 prop_assert_eq!(got.map(|h| (h.t, h.triangle)), brute);
+            }
+            if let Some(got) = grid.any_hit(o, d, t0, t1) {
+                prop_assert_eq!(got, brute.is_some());
+            }
+            // And as far as the sky rays reach.
+            let far = t1 + 20.0;
+            if let Some(got) = grid.any_hit(o, d, t0, far) {
+                let brute = tris.iter().any(|t| intersect(t, o, d, t0, far).is_some());
+                prop_assert_eq!(got, brute);
             }
         }
     }
