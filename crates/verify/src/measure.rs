@@ -2666,17 +2666,9 @@ fn measure_vectors(
         }
     };
     let pass = |vectors: &[Vector], progress: Option<Progress<'_>>| -> Measurement {
-        // The readings where they were made (a tile's, or a chunk's in order), and where each
-        // vector's lies among them (`at`: which, and its place there): the measurement's
-        // arrays are gathered from them at the end, without a copy of them all in between
-        // (on sphere_on_plate's ball program such a copy cost 12 % of the verification's
-        // page faults: 12.5 k a call against 11.0 k without, one thread).
-        let mut made: Vec<TileReadings> = Vec::new();
-        let mut at = vec![(u32::MAX, 0u32); vectors.len()];
-        let mut measured = 0;
+        let mut readings: Vec<Reading> = Vec::with_capacity(vectors.len());
         let mut stats = [0usize; 5];
         for chunk in vectors.chunks(MEASURE_CHUNK) {
-            let (base, first) = (measured, made.len() as u32);
             if direct {
                 // In tiles of neighbouring vectors (Morton order of their origins), each seeded
                 // by the move that cut one before it; the seeds only prune (the answers do not
@@ -2883,60 +2875,56 @@ fn measure_vectors(
                         (out, sum)
                     })
                     .collect();
-                // Where each index's reading lies: its tile, its place there.
+                // Back in the vectors' order: where each index's reading lies (its tile, its
+                // place there), then the readings gathered in parallel.
+                let mut at = vec![(u32::MAX, 0u32); chunk.len()];
                 for (t, (out, sum)) in done.iter().enumerate() {
                     add(&mut stats, sum);
                     for (k, &(i, _)) in out.iter().enumerate() {
-                        at[base + i as usize] = (first + t as u32, k as u32);
+                        at[i as usize] = (t as u32, k as u32);
                     }
                 }
-                made.extend(done);
+                readings.par_extend(at.par_iter().map(|&(t, k)| {
+                    assert!(t != u32::MAX, "every vector of the chunk measured once");
+                    done[t as usize].0[k as usize].1
+                }));
             } else {
                 let found = find(chunk);
-                let (per, counts): (Vec<(u32, Reading)>, Vec<[usize; 5]>) = chunk
+                let per: Vec<(Reading, [usize; 5])> = chunk
                     .par_iter()
                     .zip(found.par_iter())
-                    .enumerate()
-                    .map(|(i, x)| {
+                    .map(|x| {
                         let r = one(x);
-                        ((i as u32, Reading::of(&r)), r.4)
+                        (Reading::of(&r), r.4)
                     })
-                    .unzip();
-                for c in &counts {
-                    add(&mut stats, c);
+                    .collect();
+                for (r, s) in per {
+                    add(&mut stats, &s);
+                    readings.push(r);
                 }
-                for (k, a) in at[base..base + chunk.len()].iter_mut().enumerate() {
-                    *a = (first, k as u32);
-                }
-                made.push((per, [0; 5]));
             }
-            measured += chunk.len();
             if let Some(p) = progress {
-                p(measured, vectors.len());
+                p(readings.len(), vectors.len());
             }
         }
-        // In one pass over the vectors.
-        let (deviations, (facing, (linear_mm, (source, from_start)))) = at
+        let deviations = readings
             .par_iter()
             .zip(vectors)
-            .map(|(&(t, k), v)| {
-                assert!(t != u32::MAX, "every vector measured once");
-                let r = &made[t as usize].0[k as usize].1;
-                let d = Deviation {
-                    position: v.o,
-                    normal: v.n,
-                    signed_mm: r.signed_mm,
-                    source_move: r.source_move,
-                };
-                (
-                    d,
-                    (
-                        r.facing,
-                        (r.linear_mm, (r.source, r.signed_mm == Some(v.lo))),
-                    ),
-                )
+            .map(|(r, v)| Deviation {
+                position: v.o,
+                normal: v.n,
+                signed_mm: r.signed_mm,
+                source_move: r.source_move,
             })
-            .unzip();
+            .collect();
+        let facing = readings.par_iter().map(|r| r.facing).collect();
+        let linear_mm = readings.par_iter().map(|r| r.linear_mm).collect();
+        let source = readings.par_iter().map(|r| r.source).collect();
+        let from_start = readings
+            .par_iter()
+            .zip(vectors)
+            .map(|(r, v)| r.signed_mm == Some(v.lo))
+            .collect();
         Measurement {
             deviations,
             facing,
