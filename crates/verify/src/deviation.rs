@@ -427,16 +427,11 @@ impl<'a> TriangleGrid<'a> {
         })
     }
 
-    /// [`TriangleBvh::any_within`] for the same triangles, from the cubes the box of the
-    /// ball about `p` (radius `r`, padded for rounding) meets; `None` when that box meets
-    /// more than 64 cubes (ask the tree). A triangle nearer than `r`
-    /// lists itself in a cube holding its nearest point, which that box meets.
-    pub fn any_within(&self, p: DVec3, r: f64) -> Option<bool> {
-        if r.is_nan() || r <= 0.0 {
-            return Some(false);
-        }
-        let pad = r * (1.0 + 1e-9) + 1e-9 * (1.0 + p.abs().max_element());
-        let (a, b) = (p - pad - self.lo, p + pad - self.lo);
+    /// The range of cubes (lowest and highest index per axis) that the box `a..=b` meets:
+    /// `Some(None)` where it lies outside the grid, `None` where its bounds are not finite or
+    /// it meets more than [`GRID_QUERY_CELLS`] cubes.
+    fn cubes(&self, a: DVec3, b: DVec3) -> Option<Option<([usize; 3], [usize; 3])>> {
+        let (a, b) = (a - self.lo, b - self.lo);
         let d = self.dims;
         let mut l = [0usize; 3];
         let mut h = [0usize; 3];
@@ -446,7 +441,7 @@ impl<'a> TriangleGrid<'a> {
                 return None;
             }
             if x1 < 0.0 || x0 >= d[i] as f64 {
-                return Some(false);
+                return Some(None);
             }
             l[i] = (x0.floor().max(0.0) as usize).min(d[i] - 1);
             h[i] = (x1.floor().max(0.0) as usize).min(d[i] - 1);
@@ -454,6 +449,22 @@ impl<'a> TriangleGrid<'a> {
         if (0..3).map(|i| h[i] - l[i] + 1).product::<usize>() > GRID_QUERY_CELLS {
             return None;
         }
+        Some(Some((l, h)))
+    }
+
+    /// [`TriangleBvh::any_within`] for the same triangles, from the cubes the box of the
+    /// ball about `p` (radius `r`, padded for rounding) meets; `None` when that box meets
+    /// more than 64 cubes (ask the tree). A triangle nearer than `r`
+    /// lists itself in a cube holding its nearest point, which that box meets.
+    pub fn any_within(&self, p: DVec3, r: f64) -> Option<bool> {
+        if r.is_nan() || r <= 0.0 {
+            return Some(false);
+        }
+        let pad = r * (1.0 + 1e-9) + 1e-9 * (1.0 + p.abs().max_element());
+        let Some((l, h)) = self.cubes(p - pad, p + pad)? else {
+            return Some(false);
+        };
+        let d = self.dims;
         for z in l[2]..=h[2] {
             for y in l[1]..=h[1] {
                 for x in l[0]..=h[0] {
@@ -525,24 +536,10 @@ impl TriangleGrid<'_> {
         }
         let (p, q) = (origin + t0 * dir, origin + t1 * dir);
         let pad = DVec3::splat(1e-9 * (1.0 + p.abs().max(q.abs()).max_element()));
-        let (a, b) = (p.min(q) - pad - self.lo, p.max(q) + pad - self.lo);
+        let Some((l, h)) = self.cubes(p.min(q) - pad, p.max(q) + pad)? else {
+            return Some(());
+        };
         let d = self.dims;
-        let mut l = [0usize; 3];
-        let mut h = [0usize; 3];
-        for i in 0..3 {
-            let (x0, x1) = (a[i] * self.inv, b[i] * self.inv);
-            if !(x0.is_finite() && x1.is_finite()) {
-                return None;
-            }
-            if x1 < 0.0 || x0 >= d[i] as f64 {
-                return Some(());
-            }
-            l[i] = (x0.floor().max(0.0) as usize).min(d[i] - 1);
-            h[i] = (x1.floor().max(0.0) as usize).min(d[i] - 1);
-        }
-        if (0..3).map(|i| h[i] - l[i] + 1).product::<usize>() > GRID_QUERY_CELLS {
-            return None;
-        }
         let inv_dir = DVec3::new(1.0 / dir.x, 1.0 / dir.y, 1.0 / dir.z);
         let cell = 1.0 / self.inv;
         let mut hi = t1;
