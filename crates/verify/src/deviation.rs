@@ -481,9 +481,7 @@ impl<'a> TriangleGrid<'a> {
         }
         Some(false)
     }
-}
 
-impl TriangleGrid<'_> {
     /// [`TriangleBvh::lowest_hit`] for the same triangles, every crossing accepted, from the
     /// cubes that the segment `origin + t·dir`, `t ∈ [t0, t1]`, meets (padded for rounding):
     /// the crossing with the smallest `t`, ties to the smaller triangle index. `None` when

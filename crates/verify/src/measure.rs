@@ -1469,9 +1469,9 @@ impl Extras {
         }
         let (n, len) = self.axes[ci as usize];
         // Then the segment against the box's bounding sphere (the segment's nearest point to
-        // the box's middle): that turns away about half of what is left, the distance to the
-        // box proper (below) the rest (on mount_rush's ball program 0.86 M of the 1.85 M
-        // segments left here, none of them within `round` of the box).
+        // the box's middle), which holds the box: a cheap necessary test that turns away
+        // about half of what is left (on mount_rush's ball program 0.86 M of the 1.85 M
+        // segments left here), the distance to the box proper (below) the rest.
         let (centre, radius) = (0.5 * (lo + hi), 0.5 * (hi - lo).length());
         let near = c0 + (centre - c0).dot(n).clamp(0.0, len) * n;
         let reach = (radius + round) * (1.0 + 1e-9);
