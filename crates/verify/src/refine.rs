@@ -454,17 +454,18 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
                 cfg.region.as_ref().map(|r| (r, normals0.as_slice())),
                 cfg.max_vertices,
             )
-            .map(|r| (r.pos, r.tris, r.src))
+            .map(|r| (r.pos, r.tris, r.src, r.home))
         } else {
             Ok((
                 welded_pos.clone(),
                 welded_tris.clone(),
                 (0..welded_tris.len() as u32).collect(),
+                vec![HOME_CORNER; welded_pos.len()],
             ))
         };
-        let refined = start.and_then(|(pos, tris, src)| {
+        let refined = start.and_then(|(pos, tris, src, home)| {
             split_edges(
-                pos,
+                (pos, home),
                 tris,
                 src,
                 s,
@@ -473,9 +474,16 @@ pub fn refine(mesh: &Mesh, cfg: &RefineConfig) -> Result<RefinedMesh, RefineErro
             )
         });
         match refined {
-            Ok((pos, tris, src)) => {
-                let (positions, normals, triangles) =
-                    vertex_normals(mesh, &welded_tris, pos, tris, &src, cfg.crease_angle_deg);
+            Ok(((pos, home), tris, src)) => {
+                let (positions, normals, triangles) = vertex_normals(
+                    mesh,
+                    &welded_tris,
+                    pos,
+                    tris,
+                    &src,
+                    cfg.crease_angle_deg,
+                    Some(&home),
+                );
                 return Ok(RefinedMesh {
                     positions,
                     normals,
@@ -522,6 +530,33 @@ pub(crate) fn meets_region(region: RegionOf<'_>, pos: &[DVec3], t: &[u32; 3], sr
     r.reached(&t.map(|i| pos[i as usize]), normals[src as usize], 0.0)
 }
 
+/// A refined vertex's place on the design (its home), which decides the design faces
+/// around it without a pass over the refined faces (see [`vertex_normals`]): a design
+/// corner (`HOME_CORNER`; its index is the design vertex's), a point of a design edge (the
+/// edge's [`edge_key`], whose top bit is clear), or a point inside design face `f`
+/// (`HOME_FACE | f`).
+pub(crate) const HOME_CORNER: u64 = u64::MAX;
+
+/// See [`HOME_CORNER`].
+pub(crate) const HOME_FACE: u64 = 1 << 63;
+
+/// The home ([`HOME_CORNER`]) of the midpoint of the edge `a`–`b` of a refined face in
+/// design face `f`: on a design edge where both ends lie on it (a straight edge holds the
+/// segment between two of its points, and a segment inside a face that meets the face's
+/// side anywhere but at its ends runs along it), else inside `f`. Two corners of one design
+/// face span one of its edges.
+fn midpoint_home(home: &[u64], a: u32, b: u32, f: u32) -> u64 {
+    let on = |e: u64, c: u32| e >> 32 == u64::from(c) || e & 0xffff_ffff == u64::from(c);
+    let edge = |h: u64| h & HOME_FACE == 0;
+    match (home[a as usize], home[b as usize]) {
+        (HOME_CORNER, HOME_CORNER) => edge_key(a, b),
+        (HOME_CORNER, e) if edge(e) && on(e, a) => e,
+        (e, HOME_CORNER) if edge(e) && on(e, b) => e,
+        (e, g) if e == g && edge(e) => e,
+        _ => HOME_FACE | u64::from(f),
+    }
+}
+
 /// The index `k` of the longest edge `t[k] → t[k+1]` of a face; ties go to the smaller edge
 /// key, so the choice does not depend on how the face's corners are rotated.
 fn longest_edge(pos: &[DVec3], t: &[u32; 3]) -> usize {
@@ -561,13 +596,13 @@ fn remove_at<T>(v: &mut Vec<T>, gone: impl Iterator<Item = usize>) {
 /// (no slivers from repeated closure). Returns `Err(cap)` when the vertex count passes the cap.
 #[allow(clippy::type_complexity)]
 fn split_edges(
-    mut pos: Vec<DVec3>,
+    (mut pos, mut home): (Vec<DVec3>, Vec<u64>),
     mut tris: Vec<[u32; 3]>,
     mut src: Vec<u32>,
     s: f64,
     cap: Option<usize>,
     region: RegionOf<'_>,
-) -> Result<(Vec<DVec3>, Vec<[u32; 3]>, Vec<u32>), usize> {
+) -> Result<((Vec<DVec3>, Vec<u64>), Vec<[u32; 3]>, Vec<u32>), usize> {
     let inside = |pos: &[DVec3], t: &[u32; 3], src: u32| meets_region(region, pos, t, src);
     let s2 = s * s;
     if let Some(c) = cap
@@ -626,7 +661,7 @@ fn split_edges(
                 done.push(t);
                 done_src.push(sidx);
             }
-            return Ok((pos, done, done_src));
+            return Ok(((pos, home), done, done_src));
         }
         let mut marked: IntMap<u64, u32> = IntMap::default();
         for (t, &k) in active.iter().zip(&longest) {
@@ -672,13 +707,14 @@ fn split_edges(
             }
         }
         // Midpoints, numbered in face order for determinism.
-        for t in &active {
+        for (t, &sidx) in active.iter().zip(&active_src) {
             for k in 0..3 {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
                 if let Some(m) = marked.get_mut(&edge_key(a, b))
                     && *m == u32::MAX
                 {
                     pos.push(0.5 * (pos[a as usize] + pos[b as usize]));
+                    home.push(midpoint_home(&home, a, b, sidx));
                     *m = (pos.len() - 1) as u32;
                 }
             }
@@ -711,6 +747,123 @@ fn split_edges(
     }
 }
 
+/// Design face `d`'s angle at vertex `v` (see [`vertex_normals`]): its corner's angle
+/// where `v` is one of its corners, else π (a point of one of its edges).
+fn design_angle(design: &[[u32; 3]], pos: &[DVec3], d: u32, v: u32) -> f64 {
+    let t = design[d as usize];
+    match t.iter().position(|&x| x == v) {
+        Some(j) => corner_angle(
+            pos[t[j] as usize],
+            pos[t[(j + 1) % 3] as usize],
+            pos[t[(j + 2) % 3] as usize],
+        ),
+        None => std::f64::consts::PI,
+    }
+}
+
+/// [`vertex_normals`] from the vertices' homes, one normal per vertex: a point inside a
+/// design face takes the face's normal; one on the design's edges or corners the normal of
+/// its design faces (ascending) if they all have one, else their sum weighted by their
+/// angles there, normalised. `None` where that is not what the passes over the refined
+/// faces give: two of the faces farther apart than the crease angle (`cos_crease`, the
+/// same products the passes compare), a sum without a length, or a home without a face.
+fn normals_by_home(
+    design: &[[u32; 3]],
+    design_n: &[DVec3],
+    pos: &[DVec3],
+    home: &[u64],
+    cos_crease: f64,
+) -> Option<Vec<DVec3>> {
+    // Design vertices numbered below 2^31: an edge's key keeps its top bit clear.
+    if home.len() != pos.len() || pos.len() > 1 << 31 {
+        return None;
+    }
+    // The design faces at each design corner (ascending), and each design edge's.
+    let nd = design
+        .iter()
+        .flatten()
+        .map(|&v| v as usize + 1)
+        .max()
+        .unwrap_or(0);
+    let mut start = vec![0u32; nd + 1];
+    for &v in design.iter().flatten() {
+        start[v as usize + 1] += 1;
+    }
+    for i in 0..nd {
+        start[i + 1] += start[i];
+    }
+    let mut at = start.clone();
+    let mut around = vec![0u32; start[nd] as usize];
+    for (d, t) in design.iter().enumerate() {
+        for &v in t {
+            around[at[v as usize] as usize] = d as u32;
+            at[v as usize] += 1;
+        }
+    }
+    drop(at);
+    let mut edges: Vec<(u64, u32)> = design
+        .iter()
+        .enumerate()
+        .flat_map(|(d, t)| (0..3).map(move |k| (edge_key(t[k], t[(k + 1) % 3]), d as u32)))
+        .collect();
+    edges.sort_unstable();
+    // The normal of vertex `v` from its design faces (ascending, each once).
+    let normal = |v: usize, faces: &[u32]| -> Option<DVec3> {
+        let n0 = design_n[*faces.first()? as usize];
+        let dn = |d: u32| design_n[d as usize];
+        if faces.iter().all(|&d| dn(d) == n0) {
+            return Some(n0);
+        }
+        // Each corner's sum takes the faces within the crease angle of its own (the same
+        // products): here every face for every corner, so one sum.
+        if !faces
+            .iter()
+            .all(|&a| faces.iter().all(|&b| dn(b).dot(dn(a)) >= cos_crease))
+        {
+            return None;
+        }
+        let mut sum = DVec3::ZERO;
+        for &d in faces {
+            sum += design_angle(design, pos, d, v as u32) * dn(d);
+        }
+        sum.try_normalize()
+    };
+    let at = |faces: &mut Vec<u32>, v: usize, h: u64| -> Option<DVec3> {
+        faces.clear();
+        match h {
+            HOME_CORNER => {
+                let (a, b) = (*start.get(v)? as usize, *start.get(v + 1)? as usize);
+                faces.extend_from_slice(&around[a..b]);
+            }
+            h if h & HOME_FACE != 0 => {
+                return design_n.get((h & !HOME_FACE) as usize).copied();
+            }
+            key => {
+                let lo = edges.partition_point(|e| e.0 < key);
+                let hi = lo + edges[lo..].partition_point(|e| e.0 == key);
+                faces.extend(edges[lo..hi].iter().map(|e| e.1));
+            }
+        }
+        // A degenerate face lists a corner or an edge twice: each face counts once.
+        faces.dedup();
+        normal(v, faces)
+    };
+    // Collected as the vertices' own array (a collect of options lists pieces and copies
+    // them), a vertex without its normal flagged.
+    let failed = std::sync::atomic::AtomicBool::new(false);
+    let normals: Vec<DVec3> = home
+        .par_iter()
+        .enumerate()
+        .map_init(Vec::new, |faces, (v, &h)| {
+            at(faces, v, h).unwrap_or_else(|| {
+                failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                DVec3::NAN
+            })
+        })
+        .collect();
+    (!failed.into_inner()).then_some(normals)
+}
+
 fn corner_angle(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let (u, v) = (b - a, c - a);
     u.cross(v).length().atan2(u.dot(v))
@@ -733,6 +886,14 @@ const HEMISPHERE_COS: f64 = 0.017_452_406_437_283_5;
 /// vertex is one of its corners (`design`: the design faces' corners, numbered as the first
 /// points of `pos`), else π (a point of one of its edges). The same sum as over the refined
 /// corners' angles, but for their rounding.
+///
+/// With the vertices' homes ([`HOME_CORNER`]) the design faces around each vertex come from
+/// the design's own corners and edges, not from a pass over the refined faces (three
+/// passes over some 800 k corners, on one thread, took sphere_on_plate's ball program
+/// 5 ms): where every vertex then has one normal (creases of 178° or more averaged, no
+/// pair of faces around a vertex farther apart than that, every sum of a length to
+/// normalise), as with every crease the verifier averages, those normals are the ones the
+/// passes give, bit for bit; else the passes decide.
 fn vertex_normals(
     mesh: &Mesh,
     design: &[[u32; 3]],
@@ -740,6 +901,7 @@ fn vertex_normals(
     tris: Vec<[u32; 3]>,
     src: &[u32],
     crease_deg: f64,
+    home: Option<&[u64]>,
 ) -> (Vec<DVec3>, Vec<DVec3>, Vec<[u32; 3]>) {
     let cos_crease = crease_deg.to_radians().cos();
     let design_n: Vec<DVec3> = mesh
@@ -747,6 +909,12 @@ fn vertex_normals(
         .par_iter()
         .map(|t| t.normal().unwrap_or(DVec3::Z))
         .collect();
+    if cos_crease <= ALL_FACES_COS
+        && let Some(home) = home
+        && let Some(normals) = normals_by_home(design, &design_n, &pos, home, cos_crease)
+    {
+        return (pos, normals, tris);
+    }
     let face_n = |f: u32| design_n[src[f as usize] as usize];
     // Per vertex: the one design face its faces lie in, `MIXED` where they lie in several,
     // `UNUSED` where no face uses it.
@@ -797,17 +965,7 @@ fn vertex_normals(
     }
     drop(fill);
     // Design face `d`'s angle at vertex `v` (see above).
-    let angle = |d: u32, v: u32| {
-        let t = design[d as usize];
-        match t.iter().position(|&x| x == v) {
-            Some(j) => corner_angle(
-                pos[t[j] as usize],
-                pos[t[(j + 1) % 3] as usize],
-                pos[t[(j + 2) % 3] as usize],
-            ),
-            None => std::f64::consts::PI,
-        }
-    };
+    let angle = |d: u32, v: u32| design_angle(design, &pos, d, v);
     // Per mixed vertex, in parallel over blocks of them: its distinct normals in the order
     // of its corners (`normals`, `count` per vertex) and each corner's index among them
     // (`slot`, aligned with `corners`). The same as one pass over the vertices in order.
@@ -836,10 +994,12 @@ fn vertex_normals(
                 let cs = &corners[c0..c1];
                 let slot = &mut slot[c0 - base..c1 - base];
                 let first = normals.len();
-                // Design faces apart, but of one normal (coplanar).
+                // Design faces apart, but of one normal (coplanar): the lowest-numbered
+                // face's (normals that compare equal may differ in a zero's sign).
                 let n0 = face_n(cs[0].0);
                 if cs.iter().all(|&(f, _)| face_n(f) == n0) {
-                    normals.push(n0);
+                    let first = cs.iter().map(|&(f, _)| src[f as usize]).min();
+                    normals.push(first.map_or(n0, |d| design_n[d as usize]));
                     count.push(1);
                     slot.fill(0);
                     continue;
@@ -1089,9 +1249,10 @@ mod tests {
         let shifted: Vec<[u32; 3]> = faces.iter().map(|t| t.map(|v| v + 1)).collect();
         let src = [0u32, 1];
         for deg in [180.0, 30.0] {
-            let (p0, n0, t0) = vertex_normals(&m, &faces, pos.clone(), faces.clone(), &src, deg);
+            let (p0, n0, t0) =
+                vertex_normals(&m, &faces, pos.clone(), faces.clone(), &src, deg, None);
             let (p1, n1, t1) =
-                vertex_normals(&m, &shifted, with.clone(), shifted.clone(), &src, deg);
+                vertex_normals(&m, &shifted, with.clone(), shifted.clone(), &src, deg, None);
             assert_eq!((p0.len(), n0.len()), (p1.len(), n1.len()), "{deg}°");
             assert!(!p1.contains(&DVec3::splat(7.0)), "{deg}°");
             for (a, b) in t0.iter().zip(&t1) {
@@ -1102,8 +1263,108 @@ mod tests {
             }
         }
         // At 30° the fold's two vertices on the crease are duplicated: 4 + 2.
-        let (p, _, _) = vertex_normals(&m, &shifted, with, shifted.clone(), &src, 30.0);
+        let (p, _, _) = vertex_normals(&m, &shifted, with, shifted.clone(), &src, 30.0, None);
         assert_eq!(p.len(), 6);
+    }
+
+    /// The normals from the vertices' homes are the passes' normals, bit for bit, with the
+    /// same points and faces, after the remesh and after the bisection alone (whose
+    /// midpoints fall on design edges, on the edges' points and inside faces): on
+    /// [`normals_design`] (gentle creases, folds of 90°, 60° and 179.9°), two faces of one
+    /// plane whose normals differ in a zero's sign, a closed box, an open plate (a rim) and
+    /// a tetrahedron. At 180° they serve every mesh; at 179.85° not the design,
+    /// whose fin folds further than that.
+    #[test]
+    fn normals_from_homes_are_the_passes_normals() {
+        let bits = |n: &[DVec3]| -> Vec<[u64; 3]> {
+            n.iter().map(|v| v.to_array().map(f64::to_bits)).collect()
+        };
+        let (o, e) = (DVec3::new(5.0, 5.0, 5.0), 2.0);
+        let c = |x: f64, y: f64, z: f64| o + e * DVec3::new(x, y, z);
+        let quad = |a: DVec3, b: DVec3, cc: DVec3, d: DVec3| {
+            [Triangle::new(a, b, cc), Triangle::new(a, cc, d)]
+        };
+        let mut boxed = Vec::new();
+        for q in [
+            quad(c(0., 0., 0.), c(0., 1., 0.), c(1., 1., 0.), c(1., 0., 0.)),
+            quad(c(0., 0., 1.), c(1., 0., 1.), c(1., 1., 1.), c(0., 1., 1.)),
+            quad(c(0., 0., 0.), c(1., 0., 0.), c(1., 0., 1.), c(0., 0., 1.)),
+            quad(c(0., 1., 0.), c(0., 1., 1.), c(1., 1., 1.), c(1., 1., 0.)),
+            quad(c(0., 0., 0.), c(0., 0., 1.), c(0., 1., 1.), c(0., 1., 0.)),
+            quad(c(1., 0., 0.), c(1., 1., 0.), c(1., 1., 1.), c(1., 0., 1.)),
+        ] {
+            boxed.extend(q);
+        }
+        let plate = quad(c(0., 0., 0.), c(1.5, 0., 0.), c(1.5, 1., 0.), c(0., 1., 0.)).to_vec();
+        // Two faces of one plane whose normals compare equal but differ in a zero's sign:
+        // the points between them take the first face's.
+        let (p, q, r, t) = (
+            DVec3::new(3.0, 0.0, 0.0),
+            DVec3::new(3.0, 0.0, 2.0),
+            DVec3::ZERO,
+            DVec3::new(0.0, 0.0, 2.0),
+        );
+        let wall = vec![Triangle::new(p, q, r), Triangle::new(q, t, r)];
+        let wn = wall.iter().map(|t| t.normal().unwrap()).collect::<Vec<_>>();
+        assert!(wn[0] == wn[1] && bits(&wn[..1]) != bits(&wn[1..]), "{wn:?}");
+        let mut served = 0;
+        for (name, tris) in [
+            ("wall", wall),
+            ("design", normals_design()),
+            ("box", boxed),
+            ("plate", plate),
+            ("tetra", tetra()),
+        ] {
+            let m = mesh(tris);
+            let (wp, wt) = weld(&m);
+            let design_n: Vec<DVec3> = m
+                .triangles()
+                .iter()
+                .map(|t| t.normal().unwrap_or(DVec3::Z))
+                .collect();
+            for remeshed in [true, false] {
+                for s in [0.3, 0.7] {
+                    let (pos, tris, src, home) = if remeshed {
+                        let r = crate::remesh::remesh(&wp, &wt, s, None, None).unwrap();
+                        (r.pos, r.tris, r.src, r.home)
+                    } else {
+                        let src = (0..wt.len() as u32).collect();
+                        (wp.clone(), wt.clone(), src, vec![HOME_CORNER; wp.len()])
+                    };
+                    let ((pos, home), tris, src) =
+                        split_edges((pos, home), tris, src, s, None, None).unwrap();
+                    for deg in [180.0f64, 179.85, 150.0] {
+                        let at = format!("{name}, remesh {remeshed}, s {s}, {deg}°");
+                        let cos = deg.to_radians().cos();
+                        let fast = normals_by_home(&wt, &design_n, &pos, &home, cos);
+                        let (p1, n1, t1) =
+                            vertex_normals(&m, &wt, pos.clone(), tris.clone(), &src, deg, None);
+                        let (p2, n2, t2) = vertex_normals(
+                            &m,
+                            &wt,
+                            pos.clone(),
+                            tris.clone(),
+                            &src,
+                            deg,
+                            Some(&home),
+                        );
+                        assert_eq!((&p1, &t1), (&p2, &t2), "{at}");
+                        assert_eq!(bits(&n1), bits(&n2), "{at}");
+                        if let Some(n) = &fast {
+                            assert_eq!((&p1, &t1), (&pos, &tris), "{at}");
+                            assert_eq!(bits(n), bits(&n1), "{at}");
+                            served += 1;
+                        }
+                        match (name, deg) {
+                            (_, 180.0) => assert!(fast.is_some(), "{at}"),
+                            ("design", 179.85) => assert!(fast.is_none(), "{at}"),
+                            _ => {}
+                        }
+                    }
+                }
+            }
+        }
+        assert!(served >= 40, "served {served}");
     }
 
     /// A faceted dome (gentle creases), a box corner (90° folds), a fin whose faces fold
@@ -1169,7 +1430,7 @@ mod tests {
         for deg in [180.0f64, 179.85, 30.0] {
             let cos = deg.to_radians().cos();
             let (out_pos, out_n, out_tris) =
-                vertex_normals(&m, &faces, pos.clone(), faces.clone(), &src, deg);
+                vertex_normals(&m, &faces, pos.clone(), faces.clone(), &src, deg, None);
             for (fi, t) in faces.iter().enumerate() {
                 for k in 0..3 {
                     let v = t[k];

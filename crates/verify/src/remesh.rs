@@ -56,12 +56,13 @@ const MID_ROUNDS: usize = 2;
 /// Where it adds more, the arrays grow as they would have.
 const HEADROOM: usize = 16;
 
-/// The remeshed design surface: positions, faces (oriented as their sources) and each
-/// face's source face.
+/// The remeshed design surface: positions, faces (oriented as their sources), each
+/// face's source face, and each point's place on the design ([`crate::refine::Home`]).
 pub(crate) struct Remeshed {
     pub pos: Vec<DVec3>,
     pub tris: Vec<[u32; 3]>,
     pub src: Vec<u32>,
+    pub home: Vec<u64>,
 }
 
 type IntMap<K, V> = HashMap<K, V, BuildHasherDefault<crate::refine::IntHasher>>;
@@ -121,6 +122,7 @@ pub(crate) fn remesh(
     let near = near_of(None);
     // Divided edges: key -> (first new vertex, count), points from the lower-numbered end.
     let mut pos = pos0.to_vec();
+    let mut home = vec![crate::refine::HOME_CORNER; pos0.len()];
     let mut divided: IntMap<u64, (u32, u32)> = IntMap::default();
     for (t, _) in tris0.iter().zip(&active).filter(|(_, a)| **a) {
         for k in 0..3 {
@@ -138,6 +140,7 @@ pub(crate) fn remesh(
                 let e = p + (f64::from(i) / f64::from(m)) * (q - p);
                 if near(e) {
                     pos.push(e);
+                    home.push(key);
                 }
             }
             divided.insert(key, (first, pos.len() as u32 - first));
@@ -225,21 +228,25 @@ pub(crate) fn remesh(
     // ten calls, and 4.0 ms with the room).
     pos.reserve_exact(np - pos.len() + np / HEADROOM);
     pos.resize(np, DVec3::ZERO);
+    home.reserve_exact(np - home.len() + np / HEADROOM);
+    home.resize(np, 0);
     let mut tris = Vec::with_capacity(nt + nt / HEADROOM);
     tris.resize(nt, [0u32; 3]);
     let mut src = Vec::with_capacity(nt + nt / HEADROOM);
     src.resize(nt, 0u32);
     let mut parts = Vec::with_capacity(meshes.len());
-    let (mut prest, mut trest, mut srest) = (&mut pos[first_new..], &mut tris[..], &mut src[..]);
+    let (mut prest, mut hrest) = (&mut pos[first_new..], &mut home[first_new..]);
+    let (mut trest, mut srest) = (&mut tris[..], &mut src[..]);
     for m in &meshes {
         let (lp, lt) = m
             .as_ref()
             .map_or((0, 1), |fm| (fm.lattice.len(), fm.tris.len()));
         let (p, pr) = prest.split_at_mut(lp);
+        let (h, hr) = hrest.split_at_mut(lp);
         let (t, tr) = trest.split_at_mut(lt);
         let (s, sr) = srest.split_at_mut(lt);
-        parts.push((p, t, s));
-        (prest, trest, srest) = (pr, tr, sr);
+        parts.push(((p, h), t, s));
+        (prest, hrest, trest, srest) = (pr, hr, tr, sr);
     }
     parts
         .into_par_iter()
@@ -247,13 +254,14 @@ pub(crate) fn remesh(
         .zip(&bases)
         .enumerate()
         .with_max_len(256)
-        .for_each(|(f, (((p, t, s), m), &base))| match m {
+        .for_each(|(f, ((((p, h), t, s), m), &base))| match m {
             None => {
                 t[0] = tris0[f];
                 s[0] = f as u32;
             }
             Some(fm) => {
                 p.copy_from_slice(&fm.lattice);
+                h.fill(crate::refine::HOME_FACE | f as u64);
                 for (out, lt) in t.iter_mut().zip(&fm.tris) {
                     *out = lt.map(|l| match fm.local(l) {
                         Local::Global(g) => g,
@@ -263,7 +271,12 @@ pub(crate) fn remesh(
                 s.fill(f as u32);
             }
         });
-    Ok(Remeshed { pos, tris, src })
+    Ok(Remeshed {
+        pos,
+        tris,
+        src,
+        home,
+    })
 }
 
 /// Face `t` turned so that its longest edge comes first (the first of equally long ones),
