@@ -890,7 +890,7 @@ const HEMISPHERE_COS: f64 = 0.017_452_406_437_283_5;
 /// With the vertices' homes ([`HOME_CORNER`]) the design faces around each vertex come from
 /// the design's own corners and edges, not from a pass over the refined faces (three
 /// passes over some 800 k corners, on one thread, took sphere_on_plate's ball program
-/// 5 ms): where every vertex then has one normal (creases of 178° or more averaged, no
+/// 5 ms): where every vertex then has one normal (creases of 178.2° or more averaged, no
 /// pair of faces around a vertex farther apart than that, every sum of a length to
 /// normalise), as with every crease the verifier averages, those normals are the ones the
 /// passes give, bit for bit; else the passes decide.
