@@ -303,8 +303,13 @@ pub type Progress<'a> = &'a (dyn Fn(usize, usize) + Sync);
 const INSIDE_MM: f64 = 1e-9;
 
 /// Vectors located and refined per chunk (progress is reported between chunks), where the
-/// swept surface is located; the direct search takes them all at once.
+/// swept surface is located.
 const MEASURE_CHUNK: usize = 1 << 17;
+
+/// The most vectors the direct search takes at once, in chunks of equal size (progress is
+/// reported per tile): its tiles' readings for a chunk are held until they are put back in
+/// order, some 64 bytes a vector.
+const DIRECT_CHUNK: usize = 1 << 20;
 
 /// The interval of `s` where `line` lies within `r` of the range between `z0` and `z1` along
 /// the unit `k` (unbounded when the line runs across `k` inside it), if any.
@@ -2663,10 +2668,11 @@ fn measure_vectors(
             (None, None) => (dev(None, None), 0.0, None, None, stats),
         }
     };
-    // Located in chunks, for progress; searched directly all at once, progress reported per
-    // tile (in chunks of 2^17, sphere_on_plate's ball program's 134,989 vectors made a
-    // second chunk of 3,917 whose 16 tiles, sorted apart from their neighbours, took a
-    // twelfth of the search's time). Each vector's answer depends on the vector alone.
+    // Located in chunks, for progress; searched directly in chunks of equal size up to 2^20
+    // vectors, progress reported per tile (in chunks of 2^17, sphere_on_plate's ball
+    // program's 134,989 vectors made a second chunk of 3,917 whose 16 tiles, sorted apart
+    // from their neighbours, took a twelfth of the search's time). Each vector's answer
+    // depends on the vector alone.
     // Kept compact (the vector's position and normal are put back at the end) and the
     // counts summed per tile: these records are copied and placed, and at several hundred
     // thousand vectors their size is felt.
@@ -2678,7 +2684,13 @@ fn measure_vectors(
     let pass = |vectors: &[Vector], progress: Option<Progress<'_>>| -> Measurement {
         let mut readings: Vec<Reading> = Vec::with_capacity(vectors.len());
         let mut stats = [0usize; 5];
-        let chunk_len = if direct { vectors.len() } else { MEASURE_CHUNK };
+        let chunk_len = if direct {
+            vectors
+                .len()
+                .div_ceil(vectors.len().div_ceil(DIRECT_CHUNK).max(1))
+        } else {
+            MEASURE_CHUNK
+        };
         // The vectors searched so far, reported in order under the lock.
         let searched = std::sync::Mutex::new(0usize);
         for chunk in vectors.chunks(chunk_len.max(1)) {
