@@ -57,7 +57,7 @@ const MID_ROUNDS: usize = 2;
 const HEADROOM: usize = 16;
 
 /// The remeshed design surface: positions, faces (oriented as their sources), each
-/// face's source face, and each point's place on the design ([`crate::refine::Home`]).
+/// face's source face, and each point's place on the design ([`crate::refine::HOME_CORNER`]).
 pub(crate) struct Remeshed {
     pub pos: Vec<DVec3>,
     pub tris: Vec<[u32; 3]>,
