@@ -1836,25 +1836,35 @@ fn measure_inner(
             outside_mm: cfg.outside_mm,
         });
     }
-    // Built in parallel: at several hundred thousand vertices the copy (and the pages it
-    // touches first) is felt.
-    let vectors: Vec<Vector> = refined
-        .positions
-        .par_iter()
-        .zip(&refined.normals)
-        .enumerate()
-        .map(|(i, (&o, &n))| Vector {
-            o,
-            n,
-            lo: -match inner {
-                Inner::All(l) => l,
-                Inner::Each(ls) => ls[i],
-            },
+    // One inner length for all: the vectors are read from the mesh as they are needed (a
+    // copy of them all, 64 bytes a vertex, cost sphere_on_plate's ball program 3 ms of
+    // its measure stage on two threads, most of it in the pages it touched first).
+    let owned: Vec<Vector>;
+    let vectors = match inner {
+        Inner::All(l) => Vectors::Mesh {
+            o: &refined.positions,
+            n: &refined.normals,
+            lo: -l,
             hi: cfg.outside_mm,
-        })
-        .collect();
+        },
+        Inner::Each(ls) => {
+            owned = refined
+                .positions
+                .par_iter()
+                .zip(&refined.normals)
+                .zip(ls)
+                .map(|((&o, &n), &l)| Vector {
+                    o,
+                    n,
+                    lo: -l,
+                    hi: cfg.outside_mm,
+                })
+                .collect();
+            Vectors::Given(&owned)
+        }
+    };
     Ok(measure_vectors(
-        &vectors, models, toolpath, cfg.facing, surface, locator, progress, redo, layout,
+        vectors, models, toolpath, cfg.facing, surface, locator, progress, redo, layout,
     ))
 }
 
@@ -1878,7 +1888,7 @@ pub fn first_entries(
         })
         .collect();
     measure_vectors(
-        &vectors,
+        Vectors::Given(&vectors),
         models,
         toolpath,
         Facing::AgainstVector,
@@ -1898,7 +1908,7 @@ pub fn first_entries(
 /// inner length)`), those again from `−length` (see [`measure_then`]).
 #[allow(clippy::too_many_arguments)]
 fn measure_vectors(
-    vectors: &[Vector],
+    vectors: Vectors<'_>,
     models: &[&SweepModel],
     toolpath: &Toolpath,
     facing: Facing,
@@ -1941,9 +1951,10 @@ fn measure_vectors(
     };
     // Every vector lies in this box.
     let empty = || (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-    let reach = vectors
-        .par_iter()
-        .fold(empty, |(lo, hi), v| {
+    let reach = (0..vectors.len())
+        .into_par_iter()
+        .fold(empty, |(lo, hi), i| {
+            let v = vectors.get(i);
             let (p, q) = (v.o + v.lo * v.n, v.o + v.hi * v.n);
             (lo.min(p).min(q), hi.max(p).max(q))
         })
@@ -2681,7 +2692,7 @@ fn measure_vectors(
             *a += b;
         }
     };
-    let pass = |vectors: &[Vector], progress: Option<Progress<'_>>| -> Measurement {
+    let pass = |vectors: Vectors<'_>, progress: Option<Progress<'_>>| -> Measurement {
         let mut readings: Vec<Reading> = Vec::with_capacity(vectors.len());
         let mut stats = [0usize; 5];
         let chunk_len = if direct {
@@ -2693,12 +2704,17 @@ fn measure_vectors(
         };
         // The vectors searched so far, reported in order under the lock.
         let searched = std::sync::Mutex::new(0usize);
-        for chunk in vectors.chunks(chunk_len.max(1)) {
+        let chunk_len = chunk_len.max(1);
+        for start in (0..vectors.len()).step_by(chunk_len) {
+            let chunk = vectors.range(start..(start + chunk_len).min(vectors.len()));
             if direct {
                 // In tiles of neighbouring vectors (Morton order of their origins), each seeded
                 // by the move that cut one before it; the seeds only prune (the answers do not
                 // depend on them, but for the last bits of a bull's Newton solve).
-                let codes = crate::locate::morton_codes_by(chunk, |v| v.o);
+                let codes = match chunk {
+                    Vectors::Given(vs) => crate::locate::morton_codes_by(vs, |v| v.o),
+                    Vectors::Mesh { o, .. } => crate::locate::morton_codes_by(o, |&p| p),
+                };
                 let mut order: Vec<(u64, u32)> =
                     codes.into_par_iter().zip(0..chunk.len() as u32).collect();
                 crate::radix::sort_by_key(&mut order, |k| k.0);
@@ -2722,7 +2738,7 @@ fn measure_vectors(
                         let (mut tlo, mut thi) =
                             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
                         for &(_, i) in tile {
-                            let v = &chunk[i as usize];
+                            let v = &chunk.get(i as usize);
                             let (p, q) = (v.o + v.lo * v.n, v.o + v.hi.min(TILE_REACH_MM) * v.n);
                             (tlo, thi) = (tlo.min(p).min(q), thi.max(p).max(q));
                         }
@@ -2768,7 +2784,7 @@ fn measure_vectors(
                             pending.clear();
                             unseeded.clear();
                             for &(_, i) in group {
-                                let v = &chunk[i as usize];
+                                let v = &chunk.get(i as usize);
                                 // The recent move nearest the vector first (the latest among
                                 // equals), then the others, latest first. Tried latest first
                                 // alone, half the vectors of sphere_on_plate's and the dome's
@@ -2827,7 +2843,7 @@ fn measure_vectors(
                                 let (mut lo, mut hi) =
                                     (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
                                 for &(i, (_, seed)) in set.iter() {
-                                    let v = &chunk[i as usize];
+                                    let v = &chunk.get(i as usize);
                                     let top = seed.map_or(v.hi, |(e, _)| e.s);
                                     let (p, q) = (v.o + v.lo * v.n, v.o + top * v.n);
                                     (lo, hi) = (lo.min(p).min(q), hi.max(p).max(q));
@@ -2888,7 +2904,7 @@ fn measure_vectors(
                                     &play[..]
                                 });
                                 for &(i, seeded) in set.iter() {
-                                    let v = &chunk[i as usize];
+                                    let v = &chunk.get(i as usize);
                                     // A ball's list holds runs, not moves.
                                     let among = (listed.0 && runs.is_none()).then_some(&vols[..]);
                                     let r = direct_one(
@@ -2926,6 +2942,17 @@ fn measure_vectors(
                     done[t as usize].0[k as usize].1
                 }));
             } else {
+                let owned: Vec<Vector>;
+                let chunk = match chunk {
+                    Vectors::Given(vs) => vs,
+                    Vectors::Mesh { .. } => {
+                        owned = (0..chunk.len())
+                            .into_par_iter()
+                            .map(|i| chunk.get(i))
+                            .collect();
+                        &owned
+                    }
+                };
                 let found = find(chunk);
                 let per: Vec<(Reading, [usize; 5])> = chunk
                     .par_iter()
@@ -2946,7 +2973,8 @@ fn measure_vectors(
         }
         let deviations = readings
             .par_iter()
-            .zip(vectors)
+            .enumerate()
+            .map(|(i, r)| (r, vectors.get(i)))
             .map(|(r, v)| Deviation {
                 position: v.o,
                 normal: v.n,
@@ -2959,8 +2987,8 @@ fn measure_vectors(
         let source = readings.par_iter().map(|r| r.source).collect();
         let from_start = readings
             .par_iter()
-            .zip(vectors)
-            .map(|(r, v)| r.signed_mm == Some(v.lo))
+            .enumerate()
+            .map(|(i, r)| r.signed_mm == Some(vectors.get(i).lo))
             .collect();
         Measurement {
             deviations,
@@ -2986,10 +3014,10 @@ fn measure_vectors(
             .iter()
             .map(|&(i, l)| Vector {
                 lo: -l,
-                ..vectors[i]
+                ..vectors.get(i)
             })
             .collect();
-        let a = pass(&again, None);
+        let a = pass(Vectors::Given(&again), None);
         for (k, &(i, _)) in picks.iter().enumerate() {
             m.deviations[i] = a.deviations[k];
             m.facing[i] = a.facing[k];
@@ -3016,6 +3044,55 @@ impl Seed {
             at,
             d,
             inv_dd: inv_or_zero(d.length_squared()),
+        }
+    }
+}
+
+/// The vectors a measurement reads: given, or a mesh's vertices along their normals with one
+/// inner and outer length for all (read as they are needed rather than copied).
+#[derive(Clone, Copy)]
+enum Vectors<'a> {
+    Given(&'a [Vector]),
+    Mesh {
+        o: &'a [DVec3],
+        n: &'a [DVec3],
+        lo: f64,
+        hi: f64,
+    },
+}
+
+impl<'a> Vectors<'a> {
+    fn len(&self) -> usize {
+        match self {
+            Vectors::Given(vs) => vs.len(),
+            Vectors::Mesh { o, .. } => o.len(),
+        }
+    }
+
+    /// Vector `i`.
+    #[inline]
+    fn get(&self, i: usize) -> Vector {
+        match *self {
+            Vectors::Given(vs) => vs[i],
+            Vectors::Mesh { o, n, lo, hi } => Vector {
+                o: o[i],
+                n: n[i],
+                lo,
+                hi,
+            },
+        }
+    }
+
+    /// The vectors `r` of these.
+    fn range(&self, r: std::ops::Range<usize>) -> Vectors<'a> {
+        match *self {
+            Vectors::Given(vs) => Vectors::Given(&vs[r]),
+            Vectors::Mesh { o, n, lo, hi } => Vectors::Mesh {
+                o: &o[r.clone()],
+                n: &n[r],
+                lo,
+                hi,
+            },
         }
     }
 }
