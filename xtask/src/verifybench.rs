@@ -167,6 +167,77 @@ fn rate(points: usize, s: f64) -> String {
     format!("{:.1}M", points as f64 / s / 1e6)
 }
 
+/// `plan` and `check` (which checks what `plan` returned) timed in alternation, `runs` times
+/// (at least once), so that both see the machine as it is at the moment: the fastest plan
+/// and its seconds, the result of the fastest check and its seconds, and the median of the
+/// runs' ratios `check s / plan s`. Stops at the first plan that fails, with its error.
+pub fn alternate<P, C, E>(
+    runs: usize,
+    plan: impl FnMut() -> Result<P, E>,
+    check: impl FnMut(&P) -> C,
+) -> Result<Paired<P, C>, E> {
+    let start = Instant::now();
+    alternate_on(runs, || start.elapsed().as_secs_f64(), plan, check)
+}
+
+/// [`alternate`] on the clock `now` (seconds).
+fn alternate_on<P, C, E>(
+    runs: usize,
+    mut now: impl FnMut() -> f64,
+    mut plan: impl FnMut() -> Result<P, E>,
+    mut check: impl FnMut(&P) -> C,
+) -> Result<Paired<P, C>, E> {
+    let mut best_plan: Option<(P, f64)> = None;
+    let mut best_check: Option<(C, f64)> = None;
+    let mut ratios = Vec::new();
+    for _ in 0..runs.max(1) {
+        let t0 = now();
+        let p = plan()?;
+        let t1 = now();
+        let c = check(&p);
+        let check_s = now() - t1;
+        let plan_s = t1 - t0;
+        ratios.push(check_s / plan_s);
+        if best_plan.as_ref().is_none_or(|b| plan_s < b.1) {
+            best_plan = Some((p, plan_s));
+        }
+        if best_check.as_ref().is_none_or(|b| check_s < b.1) {
+            best_check = Some((c, check_s));
+        }
+    }
+    ratios.sort_by(f64::total_cmp);
+    let n = ratios.len();
+    let median_ratio = if n % 2 == 1 {
+        ratios[n / 2]
+    } else {
+        0.5 * (ratios[n / 2 - 1] + ratios[n / 2])
+    };
+    let ((plan, plan_s), (check, check_s)) = (
+        best_plan.expect("at least one run"),
+        best_check.expect("at least one run"),
+    );
+    Ok(Paired {
+        plan,
+        plan_s,
+        check,
+        check_s,
+        median_ratio,
+    })
+}
+
+/// What [`alternate`] measured.
+#[derive(Debug)]
+pub struct Paired<P, C> {
+    /// The fastest plan's result and seconds.
+    pub plan: P,
+    pub plan_s: f64,
+    /// The fastest check's result and seconds.
+    pub check: C,
+    pub check_s: f64,
+    /// The median over the runs of `check s / plan s` (each run's own pair).
+    pub median_ratio: f64,
+}
+
 /// Runs the benchmark and prints the tables.
 pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     let pc = &cfg.plan;
@@ -234,63 +305,71 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     let mut table = String::from(
         "| part | tris | cutter | moves | plan s | verify s | sweep s | refine s | measure s | \
          other s | refined vertices | swept triangle slots (fwd) | max gouge mm | max excess mm | \
-         verify/plan (target <= 1) |\n\
+         verify/plan (target <= 1) | median of the runs' verify/plan |\n\
          | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | \
-         --- |\n",
+         --- | --- |\n",
     );
     for path in &pc.parts {
         let mesh = planbench::load(path)?;
         let name = planbench::part_name(path);
         for spec in &pc.cutters {
             let cutter: Cutter = spec.parse()?;
-            let line = match planbench::time_plan(&mesh, pc, cutter) {
+            let pcfg = pc.plan_config(cutter);
+            let vc = VerifyConfig::new(pc.tolerance_mm);
+            let paired = alternate(
+                pc.runs,
+                || cam_plan::plan_part(&mesh, &pcfg, None),
+                |plan| verify(&mesh, &plan.toolpath, &cutter, &vc),
+            );
+            let line = match paired {
                 Err(e) => format!("| {name} | {} | {spec} | plan failed: {e} |\n", mesh.len()),
-                Ok((plan, plan_s)) => {
-                    let vc = VerifyConfig::new(pc.tolerance_mm);
-                    let (r, verify_s) =
-                        best_of(pc.runs, || verify(&mesh, &plan.toolpath, &cutter, &vc));
-                    match r {
-                        Err(e) => format!(
-                            "| {name} | {} | {spec} | {} | {plan_s:.3} | verify failed after \
+                Ok(Paired {
+                    plan,
+                    plan_s,
+                    check: r,
+                    check_s: verify_s,
+                    median_ratio,
+                }) => match r {
+                    Err(e) => format!(
+                        "| {name} | {} | {spec} | {} | {plan_s:.3} | verify failed after \
                              {verify_s:.3} s: {e} |\n",
-                            mesh.len(),
-                            plan.toolpath.moves.len()
-                        ),
-                        Ok(v) => {
-                            let b = measure_breakdown(&v);
-                            breakdown.push_str(&format!(
-                                "| {name} | {spec} | {:.2} | {} | {} | {} | {} | {} |\n",
-                                b.us_per_vertex,
-                                b.strips,
-                                b.caps,
-                                b.imprint_points,
-                                b.refinements,
-                                b.kept_linear
-                            ));
-                            let t = v.timings;
-                            format!(
-                                "| {name} | {} | {spec} | {} | {plan_s:.3} | {verify_s:.3} | \
+                        mesh.len(),
+                        plan.toolpath.moves.len()
+                    ),
+                    Ok(v) => {
+                        let b = measure_breakdown(&v);
+                        breakdown.push_str(&format!(
+                            "| {name} | {spec} | {:.2} | {} | {} | {} | {} | {} |\n",
+                            b.us_per_vertex,
+                            b.strips,
+                            b.caps,
+                            b.imprint_points,
+                            b.refinements,
+                            b.kept_linear
+                        ));
+                        let t = v.timings;
+                        format!(
+                            "| {name} | {} | {spec} | {} | {plan_s:.3} | {verify_s:.3} | \
                                  {:.3} | {:.3} | {:.3} | {:.3} | {} | {} | {:.4} | {:.4} | \
-                                 {:.2} |\n",
-                                mesh.len(),
-                                plan.toolpath.moves.len(),
-                                t.sweep_s,
-                                t.refine_s,
-                                t.measure_s,
-                                verify_s - t.sweep_s - t.refine_s - t.measure_s,
-                                v.refined.len(),
-                                v.report
-                                    .settings
-                                    .as_ref()
-                                    .and_then(|st| st.extra.get("swept_triangle_slots").copied())
-                                    .unwrap_or(0.0),
-                                v.report.max_gouge_mm,
-                                v.report.max_excess_mm,
-                                verify_s / plan_s,
-                            )
-                        }
+                                 {:.2} | {median_ratio:.2} |\n",
+                            mesh.len(),
+                            plan.toolpath.moves.len(),
+                            t.sweep_s,
+                            t.refine_s,
+                            t.measure_s,
+                            verify_s - t.sweep_s - t.refine_s - t.measure_s,
+                            v.refined.len(),
+                            v.report
+                                .settings
+                                .as_ref()
+                                .and_then(|st| st.extra.get("swept_triangle_slots").copied())
+                                .unwrap_or(0.0),
+                            v.report.max_gouge_mm,
+                            v.report.max_excess_mm,
+                            verify_s / plan_s,
+                        )
                     }
-                }
+                },
             };
             eprint!("{line}");
             table.push_str(&line);
@@ -298,10 +377,14 @@ pub fn verify_bench(cfg: &VerifyBenchConfig) -> Result<()> {
     }
     println!(
         "cam_verify::verify vs cam_plan::plan_part, tau = {} mm, h = {} mm, \
-         VerifyConfig::new({}) (Q = 40, e = 0.005 mm, back gouges on); {}:\n\n{table}",
+         VerifyConfig::new({}) (Q = 40, e = 0.005 mm, back gouges on); each row plans and \
+         verifies in alternation, {} times: plan s and verify s are the fastest of each, \
+         verify/plan their ratio, and the last column the median of the runs' own ratios \
+         (each verify against the plan just before it); {}:\n\n{table}",
         pc.tolerance_mm,
         pc.scallop_mm,
         pc.tolerance_mm,
+        pc.runs,
         crate::load_average()
     );
     println!(
@@ -395,6 +478,7 @@ fn five_axis_bench(runs: usize) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::cell::{Cell, RefCell};
 
     #[test]
     fn five_axis_zigzag_has_every_pass_and_cell() {
@@ -418,5 +502,83 @@ mod tests {
         let t = time_imprint(&poses, &cutter, Placement::Uniform, 1, 0.0).unwrap();
         assert_eq!((t.poses, t.points), (50, 50 * 21));
         assert!(t.curves_1t_s > 0.0 && t.curves_2t_s > 0.0);
+    }
+
+    /// Plan and check alternate; the best of each is the fastest run's result, and the
+    /// median ratio is that of the runs' own pairs (here 3, 1 and 0.5: median 1, while the
+    /// ratio of the bests is 1/3).
+    #[test]
+    fn alternate_pairs_each_check_with_its_plan() {
+        let clock = Cell::new(0.0);
+        let log = RefCell::new(Vec::new());
+        let plan_s = [1.0, 2.0, 4.0];
+        let check_s = [3.0, 2.0, 2.0];
+        let run = Cell::new(0);
+        let r = alternate_on(
+            3,
+            || clock.get(),
+            || {
+                let k = run.get();
+                log.borrow_mut().push(format!("plan {k}"));
+                clock.set(clock.get() + plan_s[k]);
+                Ok::<usize, ()>(k)
+            },
+            |&k| {
+                log.borrow_mut().push(format!("check {k}"));
+                clock.set(clock.get() + check_s[k]);
+                run.set(k + 1);
+                k * 10
+            },
+        )
+        .unwrap();
+        assert_eq!(
+            log.into_inner(),
+            [
+                "plan 0", "check 0", "plan 1", "check 1", "plan 2", "check 2"
+            ]
+        );
+        assert_eq!((r.plan, r.plan_s), (0, 1.0));
+        // The first of the fastest checks.
+        assert_eq!((r.check, r.check_s), (10, 2.0));
+        assert_eq!(r.median_ratio, 1.0);
+    }
+
+    /// A failing plan ends the runs with its error; an even number of runs takes the
+    /// middle pair's mean.
+    #[test]
+    fn alternate_stops_at_a_failed_plan_and_averages_an_even_median() {
+        let calls = Cell::new(0);
+        let r = alternate_on(
+            4,
+            || 0.0,
+            || {
+                calls.set(calls.get() + 1);
+                if calls.get() == 2 {
+                    Err("no plan")
+                } else {
+                    Ok(())
+                }
+            },
+            |_| (),
+        );
+        assert_eq!(r.unwrap_err(), "no plan");
+        assert_eq!(calls.get(), 2);
+        let t = Cell::new(0.0);
+        let ratios = [1.0, 4.0, 2.0, 8.0];
+        let k = Cell::new(0);
+        let r = alternate_on(
+            4,
+            || t.get(),
+            || {
+                t.set(t.get() + 1.0);
+                Ok::<(), ()>(())
+            },
+            |_| {
+                t.set(t.get() + ratios[k.get()]);
+                k.set(k.get() + 1);
+            },
+        )
+        .unwrap();
+        assert_eq!(r.median_ratio, 3.0);
     }
 }
