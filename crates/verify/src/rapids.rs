@@ -28,7 +28,7 @@
 //! (sphere_on_plate's ball program: 35 M instructions of 1,586 M went to building one for
 //! its single rapid).
 
-use cam_core::{Cutter, DVec3, Mesh, MoveKind, Toolpath, Triangle};
+use cam_core::{Cutter, DVec3, Mesh, MeshError, MoveKind, Toolpath, Triangle};
 use cam_offset::DropCutter;
 use rayon::prelude::*;
 
@@ -158,14 +158,15 @@ pub fn check_rapids(
 /// With `prune`, the drop-cutter holds only the triangles that can raise the CL surface
 /// above some rapid (see [`reaches`]): the same depths and tips, bit for bit, as the whole
 /// part gives (`prune = false`, the reference the tests compare with). `Err` when the
-/// turned triangles make no mesh (not expected: turning keeps lengths).
+/// turned triangles make no mesh for another reason than being none or degenerate (not
+/// expected: turning keeps lengths).
 fn measure_group(
     part: &Mesh,
     cutter: &Cutter,
     k: DVec3,
     ends: &[(DVec3, DVec3)],
     prune: bool,
-) -> Result<Vec<(f64, DVec3)>, cam_core::MeshError> {
+) -> Result<Vec<(f64, DVec3)>, MeshError> {
     let frame = AxisFrame::new(k);
     let local: Vec<(DVec3, DVec3)> = ends
         .iter()
@@ -182,11 +183,13 @@ fn measure_group(
             .map(|t| frame.turn(t))
             .filter(|t| keep(t))
             .collect();
-        if tris.is_empty() {
-            None
-        } else {
-            let src = part.source().unwrap_or(std::path::Path::new("<part>"));
-            Some(DropCutter::new(&Mesh::from_triangles(tris, src)?, *cutter))
+        let src = part.source().unwrap_or(std::path::Path::new("<part>"));
+        // None kept, or only triangles that turning made degenerate (the whole turned part
+        // drops them too): nothing can rise above the rapids.
+        match Mesh::from_triangles(tris, src) {
+            Ok(m) => Some(DropCutter::new(&m, *cutter)),
+            Err(MeshError::NoTriangles { .. } | MeshError::AllDegenerate { .. }) => None,
+            Err(e) => return Err(e),
         }
     };
     // No triangle can raise the CL surface above any rapid: every depth is 0, at the rapid's
