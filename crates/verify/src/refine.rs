@@ -828,7 +828,13 @@ fn normals_by_home(
         }
         sum.try_normalize()
     };
-    let at = |faces: &mut Vec<u32>, v: usize, h: u64| -> Option<DVec3> {
+    // `last`: the previous edge key looked up on this worker and its range in `edges`: an
+    // edge's points are numbered one after another, so most lookups repeat the last one (a
+    // search per point cost sphere_on_plate's ball program some 50 k binary searches).
+    let at = |(faces, last): &mut (Vec<u32>, Option<(u64, usize, usize)>),
+              v: usize,
+              h: u64|
+     -> Option<DVec3> {
         faces.clear();
         match h {
             HOME_CORNER => {
@@ -839,8 +845,15 @@ fn normals_by_home(
                 return design_n.get((h & !HOME_FACE) as usize).copied();
             }
             key => {
-                let lo = edges.partition_point(|e| e.0 < key);
-                let hi = lo + edges[lo..].partition_point(|e| e.0 == key);
+                let (lo, hi) = match *last {
+                    Some((k, lo, hi)) if k == key => (lo, hi),
+                    _ => {
+                        let lo = edges.partition_point(|e| e.0 < key);
+                        let hi = lo + edges[lo..].partition_point(|e| e.0 == key);
+                        *last = Some((key, lo, hi));
+                        (lo, hi)
+                    }
+                };
                 faces.extend(edges[lo..hi].iter().map(|e| e.1));
             }
         }
@@ -854,12 +867,15 @@ fn normals_by_home(
     let normals: Vec<DVec3> = home
         .par_iter()
         .enumerate()
-        .map_init(Vec::new, |faces, (v, &h)| {
-            at(faces, v, h).unwrap_or_else(|| {
-                failed.store(true, std::sync::atomic::Ordering::Relaxed);
-                DVec3::NAN
-            })
-        })
+        .map_init(
+            || (Vec::new(), None),
+            |state, (v, &h)| {
+                at(state, v, h).unwrap_or_else(|| {
+                    failed.store(true, std::sync::atomic::Ordering::Relaxed);
+                    DVec3::NAN
+                })
+            },
+        )
         .collect();
     (!failed.into_inner()).then_some(normals)
 }
