@@ -2974,12 +2974,14 @@ fn measure_vectors(
         let deviations = readings
             .par_iter()
             .enumerate()
-            .map(|(i, r)| (r, vectors.get(i)))
-            .map(|(r, v)| Deviation {
-                position: v.o,
-                normal: v.n,
-                signed_mm: r.signed_mm,
-                source_move: r.source_move,
+            .map(|(i, r)| {
+                let v = vectors.get(i);
+                Deviation {
+                    position: v.o,
+                    normal: v.n,
+                    signed_mm: r.signed_mm,
+                    source_move: r.source_move,
+                }
             })
             .collect();
         let facing = readings.par_iter().map(|r| r.facing).collect();

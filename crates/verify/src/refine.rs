@@ -906,10 +906,10 @@ const HEMISPHERE_COS: f64 = 0.017_452_406_437_283_5;
 /// With the vertices' homes ([`HOME_CORNER`]) the design faces around each vertex come from
 /// the design's own corners and edges, not from passes over the refined faces (those that
 /// list each vertex's corners, over some 800 k of them, took sphere_on_plate's ball program
-/// 6.8–9.1 ms on one thread, by temporary timers): where every vertex then has one normal (creases of 178.2° or more averaged, no
-/// pair of faces around a vertex farther apart than that, every sum of a length to
-/// normalise), as with every crease the verifier averages, those normals are the ones the
-/// passes give, bit for bit; else the passes decide.
+/// 6.8–9.1 ms on one thread, by temporary timers): where every vertex then has one normal
+/// (creases of 178.2° or more averaged, no pair of faces around a vertex farther apart than
+/// that, every sum of a length to normalise), as with every crease the verifier averages,
+/// those normals are the ones the passes give, bit for bit; else the passes decide.
 fn vertex_normals(
     mesh: &Mesh,
     design: &[[u32; 3]],
